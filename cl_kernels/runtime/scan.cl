@@ -1,0 +1,81 @@
+/* Exclusive prefix sum of uint, in three kernels the host chains recursively:
+ * cs_scan_reduce sums tiles, the tile sums are scanned the same way, and
+ * cs_scan_tiles scans each tile starting from its tile's offset.
+ * Work-items cooperate only through local memory and barriers: nothing assumes
+ * they run in lockstep, so the same code is right on pocl, NVIDIA and AMD. */
+#include "common.h"
+
+#define CS_SCAN_ITEMS 8
+#define CS_SCAN_TILE (CS_WG_SIZE * CS_SCAN_ITEMS)
+/* One padding word every 32 keeps a work-item's consecutive items in distinct banks. */
+#define CS_PAD(i) ((i) + ((i) >> 5))
+
+/* Returns the exclusive prefix of `value` over the work-group; *total is the group's sum. */
+uint cs_group_exclusive_scan(uint value, __local uint* scratch, uint* total)
+{
+  const uint lid = get_local_id(0);
+  scratch[lid] = value;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint offset = 1; offset < CS_WG_SIZE; offset <<= 1) {
+    const uint add = lid >= offset ? scratch[lid - offset] : 0u;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    scratch[lid] += add;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  const uint inclusive = scratch[lid];
+  *total = scratch[CS_WG_SIZE - 1];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return inclusive - value;
+}
+
+CS_GROUP_KERNEL void cs_scan_reduce(__global const uint* in, const uint n, __global uint* tile_sums)
+{
+  __local uint scratch[CS_WG_SIZE];
+  const size_t base = get_group_id(0) * (size_t)CS_SCAN_TILE + get_local_id(0);
+  uint sum = 0;
+  for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
+    const size_t i = base + (size_t)k * CS_WG_SIZE;
+    if (i < n) sum += in[i];
+  }
+  uint total;
+  cs_group_exclusive_scan(sum, scratch, &total);
+  if (get_local_id(0) == 0) tile_sums[get_group_id(0)] = total;
+}
+
+/* `in` and `out` may be the same buffer: a group reads its whole tile before writing it. */
+CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __global uint* out,
+                                   __global const uint* tile_offsets, const uint has_offsets,
+                                   __global uint* counters, const uint total_slot)
+{
+  __local uint tile[CS_PAD(CS_SCAN_TILE)];
+  __local uint scratch[CS_WG_SIZE];
+  const uint lid = get_local_id(0);
+  const size_t base = get_group_id(0) * (size_t)CS_SCAN_TILE;
+
+  for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
+    const uint t = k * CS_WG_SIZE + lid;
+    tile[CS_PAD(t)] = base + t < n ? in[base + t] : 0u;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  uint sum = 0;
+  for (uint k = 0; k < CS_SCAN_ITEMS; ++k) sum += tile[CS_PAD(lid * CS_SCAN_ITEMS + k)];
+  uint group_total;
+  const uint prefix = cs_group_exclusive_scan(sum, scratch, &group_total);
+  const uint offset = has_offsets ? tile_offsets[get_group_id(0)] : 0u;
+  uint running = offset + prefix;
+  for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
+    const uint t = CS_PAD(lid * CS_SCAN_ITEMS + k);
+    const uint v = tile[t];
+    tile[t] = running;
+    running += v;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+
+  for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
+    const uint t = k * CS_WG_SIZE + lid;
+    if (base + t < n) out[base + t] = tile[CS_PAD(t)];
+  }
+  if (total_slot != CS_NO_SLOT && lid == 0 && get_group_id(0) == get_num_groups(0) - 1)
+    counters[total_slot] = offset + group_total;
+}

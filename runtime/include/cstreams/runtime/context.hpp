@@ -1,0 +1,60 @@
+#pragma once
+#include <cstreams/runtime/buffer.hpp>
+#include <cstreams/runtime/device.hpp>
+#include <cstreams/runtime/handle.hpp>
+#include <cstreams/runtime/kernel.hpp>
+#include <cstreams/runtime/program_registry.hpp>
+#include <cstreams/runtime/timeline.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+
+namespace cstreams::runtime {
+
+// A device with its OpenCL context, one in-order profiling queue and its program
+// registry. Everything the runtime enqueues goes through this queue, so passes need
+// no events to order themselves.
+class Context {
+public:
+  explicit Context(const DeviceInfo& device);
+  // Opens the device that `filter` selects (see select_device()).
+  explicit Context(std::string_view filter);
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  ~Context();
+
+  const DeviceInfo& device() const noexcept { return device_; }
+  cl_context get() const noexcept { return context_.get(); }
+  cl_command_queue queue() const noexcept { return queue_.get(); }
+  ProgramRegistry& programs() noexcept { return *programs_; }
+
+  // Work-group size of every kernel the runtime launches with a fixed local size.
+  std::size_t work_group_size() const noexcept { return work_group_size_; }
+
+  // Launches a 1-D range of `global` work-items (rounded up to `local`; 0 lets the
+  // driver choose local size). A launch of 0 items enqueues nothing.
+  void launch(const Kernel& kernel, std::size_t global, std::size_t local, Timeline* timeline = nullptr,
+              std::string_view label = {});
+
+  void write(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset = 0,
+             Timeline* timeline = nullptr);
+  void read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
+            Timeline* timeline = nullptr);
+  void fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,
+                Timeline* timeline = nullptr);
+  void finish();
+
+private:
+  DeviceInfo device_;
+  Handle<cl_context> context_;
+  Handle<cl_command_queue> queue_;
+  std::size_t work_group_size_ = 0;
+  std::unique_ptr<ProgramRegistry> programs_;
+};
+
+inline std::size_t round_up(std::size_t n, std::size_t multiple) { return (n + multiple - 1) / multiple * multiple; }
+
+}  // namespace cstreams::runtime

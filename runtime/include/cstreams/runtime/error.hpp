@@ -1,0 +1,54 @@
+#pragma once
+#include <cstreams/runtime/opencl.hpp>
+
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace cstreams::runtime {
+
+// Base of every error the runtime raises; what() is one line that names the context.
+class Error : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+// An OpenCL call returned an error status.
+class ClError : public Error {
+public:
+  ClError(cl_int status, std::string call, std::string context);
+  cl_int status() const noexcept { return status_; }
+  const std::string& call() const noexcept { return call_; }
+
+private:
+  cl_int status_;
+  std::string call_;
+};
+
+// A program failed to build; log() is the compiler's full output.
+class BuildError : public Error {
+public:
+  BuildError(std::string program, std::string device, std::string options, std::string log);
+  const std::string& program() const noexcept { return program_; }
+  const std::string& log() const noexcept { return log_; }
+
+private:
+  std::string program_;
+  std::string log_;
+};
+
+// No device matched a filter; what() lists the devices that exist.
+class DeviceNotFound : public Error {
+public:
+  using Error::Error;
+};
+
+const char* cl_status_name(cl_int status) noexcept;
+
+// Throws ClError when status is not CL_SUCCESS. `context` says what was being done.
+inline void check(cl_int status, const char* call, std::string_view context = {})
+{
+  if (status != CL_SUCCESS) throw ClError(status, call, std::string(context));
+}
+
+}  // namespace cstreams::runtime

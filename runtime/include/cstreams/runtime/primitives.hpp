@@ -1,0 +1,61 @@
+#pragma once
+#include <cstreams/runtime/buffer.hpp>
+#include <cstreams/runtime/kernel.hpp>
+#include <cstreams/runtime/timeline.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace cstreams::runtime {
+
+class Context;
+
+// Counter-slot value meaning "write no total" (CS_NO_SLOT in the kernels).
+constexpr std::uint32_t no_slot = 0xffffffffu;
+
+// Exclusive prefix sum of 32-bit unsigned integers on the device. Scratch for the
+// tile sums of each recursion level is kept and only ever grows.
+class Scan {
+public:
+  explicit Scan(Context& context);
+
+  // out[i] = in[0] + ... + in[i-1] for i < n; `in` and `out` may be the same buffer.
+  // The sum of all n values goes to counters[slot] unless slot is no_slot.
+  void exclusive(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
+                 Timeline* timeline = nullptr, const char* label = "scan");
+  std::size_t scratch_bytes() const;
+  // Items one tile of the scan covers; inputs up to this size take a single launch.
+  std::size_t tile_items() const;
+
+private:
+  void level(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
+             std::size_t depth, Timeline* timeline, const char* label);
+
+  Context& context_;
+  Kernel reduce_;
+  Kernel tiles_;
+  std::vector<Buffer> levels_;
+};
+
+// Stream compaction: keeps the items whose flag is non-zero, in order.
+class Compactor {
+public:
+  Compactor(Context& context, Scan& scan);
+
+  // Copies item i of `src` (items of `words` 32-bit words) for every i < n with
+  // keep[i] != 0 into `dst`, which holds `capacity` items; items past capacity are
+  // dropped, and counters[slot] receives the number of kept items either way.
+  void compact(const Buffer& src, std::size_t words, const Buffer& keep, std::size_t n, const Buffer& dst,
+               std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline = nullptr,
+               const char* label = "compact");
+  std::size_t scratch_bytes() const { return offsets_.bytes(); }
+
+private:
+  Context& context_;
+  Scan& scan_;
+  Kernel scatter_;
+  Buffer offsets_;
+};
+
+}  // namespace cstreams::runtime

@@ -1,0 +1,96 @@
+#pragma once
+#include <cstreams/runtime/buffer.hpp>
+#include <cstreams/runtime/stream_graph.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cstreams::runtime {
+
+class Context;
+
+struct SchedulerOptions {
+  Registration registration = Registration::lock_free;
+  bool profile = true;  // record OpenCL profiling events for per-pass device time
+};
+
+struct PassStats {
+  std::string name;
+  std::uint64_t device_ns = 0;  // every launch issued for the pass, packing included
+  unsigned launches = 0;
+  unsigned reruns = 0;          // executions repeated after an overflow
+};
+
+struct StreamStats {
+  std::string name;
+  bool variable = false;
+  std::size_t count = 0;
+  std::size_t capacity = 0;
+  std::size_t bytes = 0;        // device memory held
+};
+
+struct RunStats {
+  std::vector<PassStats> passes;    // in execution order
+  std::vector<StreamStats> streams; // in declaration order
+  std::uint64_t scheduler_ns = 0;   // counter clears and readbacks
+  unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
+  std::size_t scratch_bytes = 0;    // segments, flags, offsets and scan levels
+};
+
+// Runs a StreamGraph on one device. It builds every kernel at construction, owns the
+// streams' buffers and all scratch memory, inserts registration and compaction, and
+// grows and reruns on overflow so that no item is ever dropped.
+//
+// Execution goes in stages: a pass that reads a variable-length stream produced in the
+// current stage needs its count, so the stage ends there and the host reads every
+// counter of the stage in one transfer. Streams that overflowed grow; the passes that
+// produced them run again (only the packing, when the segments held everything).
+class Scheduler {
+public:
+  Scheduler(Context& context, StreamGraph graph, SchedulerOptions options = {});
+  ~Scheduler();
+  Scheduler(const Scheduler&) = delete;
+  Scheduler& operator=(const Scheduler&) = delete;
+
+  void run();
+
+  // Host transfers. Uploading to a fixed stream resizes it to `count` items;
+  // uploading to a variable stream sets its count (growing it if needed).
+  void upload(StreamId stream, const void* items, std::size_t count);
+  void download(StreamId stream, void* items, std::size_t count) const;
+  template <class T> void upload(StreamId s, const std::vector<T>& items) { upload(s, items.data(), items.size()); }
+  template <class T> std::vector<T> download(StreamId s) const
+  {
+    std::vector<T> items(count(s));
+    download(s, items.data(), items.size());
+    return items;
+  }
+
+  std::size_t count(StreamId stream) const;
+  std::size_t capacity(StreamId stream) const;
+  // Sets a variable stream's capacity, smaller ones included (tests force tiny ones).
+  void set_capacity(StreamId stream, std::size_t items);
+  // Sets a fixed stream's item count; contents are undefined until written.
+  void resize(StreamId stream, std::size_t items);
+  // Exchanges two streams' buffers and counts (ping-pong between runs).
+  void swap(StreamId a, StreamId b);
+  const Buffer& buffer(StreamId stream) const;
+
+  void set(ParamId param, const void* bytes, std::size_t size);
+  template <class T> void set(ParamId p, const T& value) { set(p, &value, sizeof(T)); }
+
+  const StreamGraph& graph() const;
+  // Pass names in execution order.
+  std::vector<std::string> execution_order() const;
+  const RunStats& stats() const;
+  Registration registration() const;
+
+private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace cstreams::runtime

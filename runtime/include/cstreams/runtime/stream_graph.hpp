@@ -1,0 +1,129 @@
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+namespace cstreams::runtime {
+
+// How a pass that emits a variable number of items writes them (registration.h).
+enum class Registration { global_atomic, segmented_lock, lock_free };
+const char* to_string(Registration registration) noexcept;
+// Accepts "global-atomic", "segmented-lock", "lock-free" (or with underscores).
+Registration parse_registration(std::string_view text);
+
+struct StreamId {
+  std::uint32_t index = 0xffffffffu;
+  friend bool operator==(StreamId a, StreamId b) { return a.index == b.index; }
+  friend bool operator!=(StreamId a, StreamId b) { return a.index != b.index; }
+};
+struct ParamId {
+  std::uint32_t index = 0xffffffffu;
+};
+
+// A kernel by source file, function name and extra build options.
+struct KernelRef {
+  KernelRef(std::string program_file, std::string kernel_name, std::string build_options = {})
+      : program(std::move(program_file)), kernel(std::move(kernel_name)), options(std::move(build_options))
+  {
+  }
+  std::string program;
+  std::string kernel;
+  std::string options;
+};
+
+// The arguments a pass binds itself, in order; the scheduler appends its own after them.
+struct BufferArg { StreamId stream; };  // the stream's buffer
+struct CountArg { StreamId stream; };   // uint: the stream's item count at launch
+struct ValueArg { std::vector<unsigned char> bytes; };
+struct ParamArg { ParamId param; };     // the parameter's value at launch (Scheduler::set)
+using PassArg = std::variant<BufferArg, CountArg, ValueArg, ParamArg>;
+
+inline PassArg buffer_of(StreamId s) { return BufferArg{s}; }
+inline PassArg count_of(StreamId s) { return CountArg{s}; }
+inline PassArg param_of(ParamId p) { return ParamArg{p}; }
+template <class T> PassArg value_of(const T& v)
+{
+  static_assert(std::is_trivially_copyable_v<T>);
+  ValueArg a;
+  a.bytes.resize(sizeof(T));
+  std::memcpy(a.bytes.data(), &v, sizeof(T));
+  return a;
+}
+
+// One kernel over the items of a stream, and what it reads and writes.
+//
+// Kernel signature: the pass's own arguments, then per emitted stream (in emit order)
+// CS_EMITTER_PARAMS(T, name), then for a culling pass `__global uint* keep` (one flag
+// per item of the culled stream). A pass must not write what it reads: reruns after
+// an overflow rely on passes being functions of their inputs.
+struct PassSpec {
+  std::string name;
+  KernelRef kernel{"", ""};
+  StreamId over;                      // one work-item per item of this stream
+  std::vector<StreamId> reads;
+  std::vector<StreamId> writes;       // fixed-length outputs
+  std::vector<StreamId> emits;        // variable-length outputs, through registration
+  StreamId cull_source, cull_target;  // compaction of cull_source into cull_target
+  std::vector<PassArg> args;
+  double items_per_work_item = 2;     // expected emissions, to size first segments
+
+  PassSpec& launch_over(StreamId s) { over = s; return *this; }
+  PassSpec& read(StreamId s) { reads.push_back(s); return *this; }
+  PassSpec& write(StreamId s) { writes.push_back(s); return *this; }
+  PassSpec& emit(StreamId s) { emits.push_back(s); return *this; }
+  PassSpec& cull(StreamId source, StreamId target) { cull_source = source; cull_target = target; return *this; }
+  PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
+  PassSpec& expect_items(double per_work_item) { items_per_work_item = per_work_item; return *this; }
+  bool culls() const { return cull_source.index != 0xffffffffu; }
+};
+
+// Every stream a pass reads (declared reads, its launch stream, the culled stream and
+// buffer arguments it does not write) and every stream it produces.
+std::vector<StreamId> pass_inputs(const PassSpec& pass);
+std::vector<StreamId> pass_outputs(const PassSpec& pass);
+
+struct StreamSpec {
+  std::string name;
+  std::size_t element_bytes = 0;
+  bool variable = false;
+  std::size_t size = 0;  // item count (fixed) or initial capacity (variable)
+};
+
+struct ParamSpec {
+  std::string name;
+  std::size_t bytes = 0;
+};
+
+// A declaration of streams and passes; the Scheduler orders and runs it. Nothing here
+// touches a device, so a graph can be built, inspected and tested anywhere.
+class StreamGraph {
+public:
+  StreamId fixed(std::string name, std::size_t element_bytes, std::size_t count);
+  StreamId variable(std::string name, std::size_t element_bytes, std::size_t initial_capacity);
+  ParamId param(std::string name, std::size_t bytes);
+  PassSpec& pass(std::string name, KernelRef kernel);
+
+  const std::vector<StreamSpec>& streams() const { return streams_; }
+  const std::vector<PassSpec>& passes() const { return passes_; }
+  const std::vector<ParamSpec>& params() const { return params_; }
+  const StreamSpec& stream(StreamId s) const;
+
+  // Pass indices in an order where every stream is written before it is read; among
+  // passes free to go, declaration order. Throws naming the passes on a cycle, a
+  // stream with two writers, a pass that writes what it reads, two passes of one
+  // name, or a culling pass not launched over the stream it culls.
+  std::vector<std::size_t> schedule() const;
+
+private:
+  std::vector<StreamSpec> streams_;
+  std::vector<PassSpec> passes_;
+  std::vector<ParamSpec> params_;
+};
+
+}  // namespace cstreams::runtime

@@ -1,0 +1,124 @@
+#include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/error.hpp>
+
+namespace cstreams::runtime {
+
+namespace {
+// 256 work-items fill an NVIDIA or AMD multiprocessor several times over and keep
+// the scan's local tile (8 items each) within 8 KiB; pocl runs it as a loop.
+constexpr std::size_t preferred_work_group_size = 256;
+
+std::size_t pick_work_group_size(const DeviceInfo& device)
+{
+  std::size_t size = 1;
+  while (size * 2 <= std::min(preferred_work_group_size, device.max_work_group_size)) size *= 2;
+  return size;
+}
+
+Handle<cl_event> out_event(Timeline* timeline, cl_event& raw)
+{
+  return timeline ? Handle<cl_event>(raw) : Handle<cl_event>();
+}
+}  // namespace
+
+Context::Context(std::string_view filter) : Context(select_device(filter)) {}
+
+Context::Context(const DeviceInfo& device) : device_(device), work_group_size_(pick_work_group_size(device))
+{
+  cl_int status = CL_SUCCESS;
+  cl_context_properties properties[] = {CL_CONTEXT_PLATFORM, cl_context_properties(device.platform), 0};
+  context_ = Handle<cl_context>(clCreateContext(properties, 1, &device_.id, nullptr, nullptr, &status));
+  check(status, "clCreateContext", "opening " + device_.name);
+  queue_ = Handle<cl_command_queue>(clCreateCommandQueue(context_.get(), device_.id, CL_QUEUE_PROFILING_ENABLE, &status));
+  check(status, "clCreateCommandQueue", "opening " + device_.name);
+  programs_ = std::make_unique<ProgramRegistry>(*this);
+  programs_->add_sources(runtime_kernel_sources());
+}
+
+Context::~Context()
+{
+  if (queue_) clFinish(queue_.get());
+}
+
+void Context::launch(const Kernel& kernel, std::size_t global, std::size_t local, Timeline* timeline,
+                     std::string_view label)
+{
+  if (global == 0) return;
+  if (local) global = round_up(global, local);
+  cl_event event = nullptr;
+  check(clEnqueueNDRangeKernel(queue_.get(), kernel.get(), 1, nullptr, &global, local ? &local : nullptr, 0,
+                               nullptr, timeline ? &event : nullptr),
+        "clEnqueueNDRangeKernel", "launching " + kernel.name() + " over " + std::to_string(global) + " work-items");
+  if (timeline) timeline->record(label.empty() ? kernel.name() : std::string(label), out_event(timeline, event));
+}
+
+void Context::write(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset, Timeline* timeline)
+{
+  if (bytes == 0) return;
+  cl_event event = nullptr;
+  check(clEnqueueWriteBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
+                             timeline ? &event : nullptr),
+        "clEnqueueWriteBuffer", "uploading " + std::to_string(bytes) + " bytes");
+  if (timeline) timeline->record("upload", out_event(timeline, event));
+}
+
+void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset, Timeline* timeline)
+{
+  if (bytes == 0) return;
+  cl_event event = nullptr;
+  check(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
+                            timeline ? &event : nullptr),
+        "clEnqueueReadBuffer", "reading back " + std::to_string(bytes) + " bytes");
+  if (timeline) timeline->record("readback", out_event(timeline, event));
+}
+
+void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,
+                       Timeline* timeline)
+{
+  if (count == 0) return;
+  cl_event event = nullptr;
+  check(clEnqueueFillBuffer(queue_.get(), buffer.get(), &value, sizeof(value), first * sizeof(value),
+                            count * sizeof(value), 0, nullptr, timeline ? &event : nullptr),
+        "clEnqueueFillBuffer", "clearing " + std::to_string(count) + " counters");
+  if (timeline) timeline->record("fill", out_event(timeline, event));
+}
+
+void Context::finish() { check(clFinish(queue_.get()), "clFinish"); }
+
+Buffer::Buffer(Context& context, std::size_t bytes, const char* label) : bytes_(bytes)
+{
+  cl_int status = CL_SUCCESS;
+  // A zero-byte cl_mem is invalid; one word keeps empty streams bindable as arguments.
+  mem_ = Handle<cl_mem>(clCreateBuffer(context.get(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 4), nullptr, &status));
+  check(status, "clCreateBuffer", std::string("allocating ") + std::to_string(bytes) + " bytes for " + label);
+}
+
+void Kernel::set_raw(unsigned index, std::size_t size, const void* value) const
+{
+  check(clSetKernelArg(kernel_.get(), index, size, value), "clSetKernelArg",
+        "setting argument " + std::to_string(index) + " of " + name_);
+}
+
+void Timeline::record(std::string label, Handle<cl_event> event)
+{
+  pending_.push_back({std::move(label), std::move(event)});
+}
+
+std::vector<Timeline::Entry> Timeline::resolve() const
+{
+  std::vector<Entry> entries;
+  entries.reserve(pending_.size());
+  for (const auto& p : pending_) {
+    cl_event e = p.event.get();
+    check(clWaitForEvents(1, &e), "clWaitForEvents", "profiling " + p.label);
+    cl_ulong start = 0, end = 0;
+    check(clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr),
+          "clGetEventProfilingInfo", "profiling " + p.label);
+    check(clGetEventProfilingInfo(e, CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr),
+          "clGetEventProfilingInfo", "profiling " + p.label);
+    entries.push_back({p.label, end > start ? end - start : 0});
+  }
+  return entries;
+}
+
+}  // namespace cstreams::runtime

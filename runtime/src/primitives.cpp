@@ -1,0 +1,78 @@
+#include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/primitives.hpp>
+
+namespace cstreams::runtime {
+
+namespace {
+// Must match CS_SCAN_ITEMS in scan.cl.
+constexpr std::size_t scan_items_per_work_item = 8;
+
+void ensure(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
+{
+  if (buffer.bytes() < bytes) buffer = Buffer(context, bytes, label);
+}
+}  // namespace
+
+Scan::Scan(Context& context)
+    : context_(context),
+      reduce_(context.programs().kernel("runtime/scan.cl", "cs_scan_reduce")),
+      tiles_(context.programs().kernel("runtime/scan.cl", "cs_scan_tiles"))
+{
+}
+
+std::size_t Scan::tile_items() const { return context_.work_group_size() * scan_items_per_work_item; }
+
+std::size_t Scan::scratch_bytes() const
+{
+  std::size_t total = 0;
+  for (const auto& b : levels_) total += b.bytes();
+  return total;
+}
+
+void Scan::exclusive(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
+                     Timeline* timeline, const char* label)
+{
+  if (n == 0) {
+    if (slot != no_slot) context_.fill_u32(counters, 0, slot, 1, timeline);
+    return;
+  }
+  level(in, out, n, counters, slot, 0, timeline, label);
+}
+
+void Scan::level(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
+                 std::size_t depth, Timeline* timeline, const char* label)
+{
+  const std::size_t wg = context_.work_group_size();
+  const std::size_t tiles = (n + tile_items() - 1) / tile_items();
+  const cl_uint count = cl_uint(n);
+  if (tiles == 1) {
+    tiles_.set_args(in, count, out, counters, cl_uint(0), counters, slot);
+    context_.launch(tiles_, wg, wg, timeline, label);
+    return;
+  }
+  if (levels_.size() <= depth) levels_.resize(depth + 1);
+  ensure(context_, levels_[depth], tiles * sizeof(cl_uint), "scan tile sums");
+  const Buffer sums = levels_[depth];
+  reduce_.set_args(in, count, sums);
+  context_.launch(reduce_, tiles * wg, wg, timeline, label);
+  level(sums, sums, tiles, counters, no_slot, depth + 1, timeline, label);
+  tiles_.set_args(in, count, out, sums, cl_uint(1), counters, slot);
+  context_.launch(tiles_, tiles * wg, wg, timeline, label);
+}
+
+Compactor::Compactor(Context& context, Scan& scan)
+    : context_(context), scan_(scan), scatter_(context.programs().kernel("runtime/compact.cl", "cs_scatter"))
+{
+}
+
+void Compactor::compact(const Buffer& src, std::size_t words, const Buffer& keep, std::size_t n, const Buffer& dst,
+                        std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline,
+                        const char* label)
+{
+  ensure(context_, offsets_, n * sizeof(cl_uint), "compaction offsets");
+  scan_.exclusive(keep, offsets_, n, counters, slot, timeline, label);
+  scatter_.set_args(src, cl_uint(words), keep, offsets_, cl_uint(n), dst, cl_uint(capacity));
+  context_.launch(scatter_, n, context_.work_group_size(), timeline, label);
+}
+
+}  // namespace cstreams::runtime

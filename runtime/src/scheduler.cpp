@@ -1,0 +1,398 @@
+#include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/primitives.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace cstreams::runtime {
+
+namespace {
+
+enum class Redo { none, pack, full };
+
+struct StreamState {
+  Buffer buffer;
+  std::size_t count = 0;
+  std::size_t capacity = 0;
+  bool known = true;
+  std::uint32_t slot = no_slot;  // count slot of a variable stream
+};
+
+struct EmitterState {
+  StreamId stream;
+  Buffer items;   // registration segments
+  Buffer counts;  // one count per segment
+  std::size_t segments = 0;
+  std::size_t segment_capacity = 0;
+  std::uint32_t overflow_slot = no_slot;
+};
+
+struct PassState {
+  const PassSpec* spec = nullptr;
+  Kernel kernel;
+  std::vector<EmitterState> emitters;
+  Buffer keep;
+  std::vector<StreamId> inputs;
+  PassStats stats;
+};
+
+// Slack on growth, so that a count that creeps up frame by frame does not rerun each time.
+std::size_t grown(std::size_t needed) { return needed + needed / 8 + 16; }
+
+void ensure(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
+{
+  if (buffer.bytes() < bytes) buffer = Buffer(context, bytes, label);
+}
+
+std::string registration_define(Registration r)
+{
+  return "-DCS_REGISTRATION=" + std::to_string(int(r));
+}
+
+}  // namespace
+
+struct Scheduler::State {
+  State(Context& c, StreamGraph g, SchedulerOptions o)
+      : context(c), graph(std::move(g)), options(o), scan(c), compactor(c, scan),
+        merge(c.programs().kernel("runtime/compact.cl", "cs_merge_segments"))
+  {
+  }
+
+  Context& context;
+  StreamGraph graph;
+  SchedulerOptions options;
+  Scan scan;
+  Compactor compactor;
+  Kernel merge;
+  Buffer offsets;
+  Buffer counters;
+  std::vector<std::uint32_t> host_counters;
+  std::vector<StreamState> streams;
+  std::vector<PassState> passes;  // execution order
+  std::vector<std::vector<unsigned char>> params;
+  Timeline timeline;
+  RunStats stats;
+
+  Timeline* tl() { return options.profile ? &timeline : nullptr; }
+  const StreamSpec& spec(StreamId s) const { return graph.stream(s); }
+  StreamState& state(StreamId s) { return streams.at(s.index); }
+  std::size_t words(StreamId s) const { return spec(s).element_bytes / 4; }
+
+  void allocate(StreamId s, std::size_t items)
+  {
+    auto& st = state(s);
+    st.buffer = Buffer(context, items * spec(s).element_bytes, spec(s).name.c_str());
+    st.capacity = items;
+  }
+
+  void bind_args(PassState& p)
+  {
+    unsigned index = 0;
+    for (const auto& a : p.spec->args) {
+      if (auto b = std::get_if<BufferArg>(&a)) p.kernel.set_arg(index, state(b->stream).buffer);
+      else if (auto c = std::get_if<CountArg>(&a)) p.kernel.set_arg(index, cl_uint(state(c->stream).count));
+      else if (auto v = std::get_if<ValueArg>(&a)) p.kernel.set_raw(index, v->bytes.size(), v->bytes.data());
+      else {
+        const auto& bytes = params.at(std::get<ParamArg>(a).param.index);
+        if (bytes.empty())
+          throw Error("pass " + p.spec->name + " needs parameter " +
+                      graph.params()[std::get<ParamArg>(a).param.index].name + ", which was never set");
+        p.kernel.set_raw(index, bytes.size(), bytes.data());
+      }
+      ++index;
+    }
+    for (auto& e : p.emitters) {
+      auto& dst = state(e.stream);
+      if (options.registration == Registration::global_atomic) {
+        p.kernel.set_arg(index++, dst.buffer);
+        p.kernel.set_arg(index++, counters);
+        p.kernel.set_arg(index++, cl_uint(dst.capacity));
+        p.kernel.set_arg(index++, counters);
+        p.kernel.set_arg(index++, cl_uint(dst.slot));
+      } else {
+        p.kernel.set_arg(index++, e.items);
+        p.kernel.set_arg(index++, e.counts);
+        p.kernel.set_arg(index++, cl_uint(e.segment_capacity));
+        p.kernel.set_arg(index++, counters);
+        p.kernel.set_arg(index++, cl_uint(e.overflow_slot));
+      }
+    }
+    if (p.spec->culls()) p.kernel.set_arg(index++, p.keep);
+  }
+
+  void prepare_segments(PassState& p, EmitterState& e, std::size_t global)
+  {
+    const std::size_t wg = context.work_group_size();
+    const bool per_group = options.registration == Registration::segmented_lock;
+    e.segments = per_group ? global / wg : global;
+    if (e.segment_capacity == 0)
+      e.segment_capacity =
+          std::max<std::size_t>(1, std::size_t(std::ceil(p.spec->items_per_work_item * double(per_group ? wg : 1))));
+    const std::size_t bytes = e.segments * e.segment_capacity * spec(e.stream).element_bytes;
+    if (bytes > context.device().max_allocation)
+      throw Error("pass " + p.spec->name + " needs " + std::to_string(bytes >> 20) + " MiB of " +
+                  to_string(options.registration) + " segments for stream " + spec(e.stream).name +
+                  " (up to " + std::to_string(e.segment_capacity) + " items per segment), more than one allocation of " +
+                  context.device().name + " may hold; the segmented-lock registration needs far less");
+    ensure(context, e.items, bytes, "registration segments");
+    ensure(context, e.counts, e.segments * sizeof(cl_uint), "registration counts");
+  }
+
+  void execute(PassState& p, Redo redo)
+  {
+    const std::size_t n = state(p.spec->over).count;
+    const std::size_t wg = context.work_group_size();
+    const std::size_t global = round_up(n, wg);
+    const bool segmented = options.registration != Registration::global_atomic;
+    const std::string& label = p.spec->name;
+    if (redo == Redo::full) {
+      if (segmented)
+        for (auto& e : p.emitters) prepare_segments(p, e, global);
+      if (p.spec->culls()) ensure(context, p.keep, n * sizeof(cl_uint), "cull flags");
+      bind_args(p);
+      context.launch(p.kernel, global, wg, tl(), label);
+      ++p.stats.launches;
+    }
+    if (segmented) {
+      for (auto& e : p.emitters) {
+        auto& dst = state(e.stream);
+        ensure(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
+        scan.exclusive(e.counts, offsets, e.segments, counters, dst.slot, tl(), label.c_str());
+        merge.set_args(e.items, cl_uint(words(e.stream)), e.counts, offsets, cl_uint(e.segments),
+                       cl_uint(e.segment_capacity), cl_uint(options.registration == Registration::lock_free),
+                       dst.buffer, cl_uint(dst.capacity));
+        context.launch(merge, e.segments * e.segment_capacity, wg, tl(), label);
+      }
+    }
+    if (p.spec->culls()) {
+      auto& dst = state(p.spec->cull_target);
+      compactor.compact(state(p.spec->cull_source).buffer, words(p.spec->cull_source), p.keep, n, dst.buffer,
+                        dst.capacity, counters, dst.slot, tl(), label.c_str());
+    }
+  }
+
+  // Reads every counter of the stage in one transfer; grows what overflowed and
+  // reruns its producer until nothing did.
+  void flush(const std::vector<PassState*>& stage)
+  {
+    if (stage.empty()) return;
+    const bool atomic = options.registration == Registration::global_atomic;
+    for (;;) {
+      context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
+      ++stats.readbacks;
+      std::vector<std::pair<PassState*, Redo>> redo;
+      for (PassState* p : stage) {
+        Redo r = Redo::none;
+        for (auto& e : p->emitters) {
+          auto& dst = state(e.stream);
+          if (!atomic && host_counters[e.overflow_slot] > e.segment_capacity) {
+            e.segment_capacity = grown(host_counters[e.overflow_slot]);
+            r = Redo::full;
+          }
+          if (host_counters[dst.slot] > dst.capacity) {
+            allocate(e.stream, grown(host_counters[dst.slot]));
+            r = std::max(r, atomic ? Redo::full : Redo::pack);
+          }
+        }
+        if (p->spec->culls()) {
+          auto& dst = state(p->spec->cull_target);
+          if (host_counters[dst.slot] > dst.capacity) {
+            allocate(p->spec->cull_target, grown(host_counters[dst.slot]));
+            r = std::max(r, Redo::pack);
+          }
+        }
+        if (r != Redo::none) redo.emplace_back(p, r);
+      }
+      if (redo.empty()) break;
+      for (auto& [p, r] : redo) {
+        if (r == Redo::full)
+          for (auto& e : p->emitters)
+            context.fill_u32(counters, 0, atomic ? state(e.stream).slot : e.overflow_slot, 1, tl());
+        execute(*p, r);
+        ++p->stats.reruns;
+      }
+    }
+    for (PassState* p : stage)
+      for (StreamId s : pass_outputs(*p->spec))
+        if (spec(s).variable) {
+          state(s).count = host_counters[state(s).slot];
+          state(s).known = true;
+        }
+  }
+
+  bool needs_new_stage(const PassState& p)
+  {
+    return std::any_of(p.inputs.begin(), p.inputs.end(),
+                       [&](StreamId s) { return spec(s).variable && !state(s).known; });
+  }
+
+  void run()
+  {
+    timeline.clear();
+    stats = RunStats{};
+    for (auto& p : passes) p.stats = PassStats{p.spec->name};
+    for (const auto& p : passes)
+      for (StreamId s : pass_outputs(*p.spec))
+        if (spec(s).variable) state(s).known = false;
+    context.fill_u32(counters, 0, 0, host_counters.size(), tl());
+
+    std::vector<PassState*> stage;
+    for (auto& p : passes) {
+      if (needs_new_stage(p)) {
+        flush(stage);
+        stage.clear();
+      }
+      execute(p, Redo::full);
+      stage.push_back(&p);
+    }
+    flush(stage);
+    collect_stats();
+  }
+
+  void collect_stats()
+  {
+    std::map<std::string, std::uint64_t> by_label;
+    for (const auto& e : timeline.resolve()) by_label[e.label] += e.nanoseconds;
+    std::uint64_t pass_total = 0;
+    for (auto& p : passes) {
+      p.stats.device_ns = by_label[p.spec->name];
+      pass_total += p.stats.device_ns;
+      stats.passes.push_back(p.stats);
+    }
+    std::uint64_t all = 0;
+    for (const auto& [label, ns] : by_label) all += ns;
+    stats.scheduler_ns = all - pass_total;
+    for (std::size_t i = 0; i < streams.size(); ++i) {
+      const auto& sp = graph.streams()[i];
+      stats.streams.push_back({sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes()});
+    }
+    stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
+    for (const auto& p : passes) {
+      stats.scratch_bytes += p.keep.bytes();
+      for (const auto& e : p.emitters) stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
+    }
+  }
+};
+
+Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions options)
+    : state_(std::make_unique<State>(context, std::move(graph), options))
+{
+  auto& s = *state_;
+  const auto order = s.graph.schedule();
+  std::uint32_t slots = 0;
+  s.streams.resize(s.graph.streams().size());
+  for (std::size_t i = 0; i < s.streams.size(); ++i) {
+    const auto& spec = s.graph.streams()[i];
+    s.allocate(StreamId{std::uint32_t(i)}, spec.size);
+    if (spec.variable) {
+      s.streams[i].slot = slots++;
+    } else {
+      s.streams[i].count = spec.size;
+    }
+  }
+  s.params.resize(s.graph.params().size());
+  const std::string define = registration_define(options.registration);
+  for (std::size_t index : order) {
+    const PassSpec& spec = s.graph.passes()[index];
+    PassState p;
+    p.spec = &spec;
+    const std::string opts = spec.kernel.options.empty() ? define : spec.kernel.options + " " + define;
+    p.kernel = context.programs().kernel(spec.kernel.program, spec.kernel.kernel, opts);
+    for (StreamId e : spec.emits) {
+      EmitterState es;
+      es.stream = e;
+      es.overflow_slot = slots++;
+      p.emitters.push_back(std::move(es));
+    }
+    p.inputs = pass_inputs(spec);
+    p.stats.name = spec.name;
+    s.passes.push_back(std::move(p));
+  }
+  s.host_counters.assign(std::max<std::uint32_t>(slots, 1), 0);
+  s.counters = Buffer(context, s.host_counters.size() * sizeof(std::uint32_t), "stream counters");
+}
+
+Scheduler::~Scheduler() = default;
+
+void Scheduler::run() { state_->run(); }
+
+void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
+{
+  auto& s = *state_;
+  auto& st = s.state(stream);
+  if (count > st.capacity || !s.spec(stream).variable) s.allocate(stream, count);
+  s.context.write(st.buffer, items, count * s.spec(stream).element_bytes);
+  st.count = count;
+  st.known = true;
+}
+
+void Scheduler::download(StreamId stream, void* items, std::size_t count) const
+{
+  auto& s = *state_;
+  auto& st = s.state(stream);
+  if (count > st.count)
+    throw Error("cannot read " + std::to_string(count) + " items of stream " + s.spec(stream).name + ", which holds " +
+                std::to_string(st.count));
+  s.context.read(st.buffer, items, count * s.spec(stream).element_bytes);
+}
+
+std::size_t Scheduler::count(StreamId stream) const { return state_->state(stream).count; }
+std::size_t Scheduler::capacity(StreamId stream) const { return state_->state(stream).capacity; }
+
+void Scheduler::set_capacity(StreamId stream, std::size_t items)
+{
+  auto& s = *state_;
+  if (!s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is fixed-length; resize it instead");
+  s.allocate(stream, items);
+  s.state(stream).count = std::min(s.state(stream).count, items);
+}
+
+void Scheduler::resize(StreamId stream, std::size_t items)
+{
+  auto& s = *state_;
+  if (s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is variable-length; its passes size it");
+  if (items != s.state(stream).capacity) s.allocate(stream, items);
+  s.state(stream).count = items;
+}
+
+void Scheduler::swap(StreamId a, StreamId b)
+{
+  auto& s = *state_;
+  const auto &sa = s.spec(a), &sb = s.spec(b);
+  if (sa.element_bytes != sb.element_bytes || sa.variable != sb.variable)
+    throw Error("streams " + sa.name + " and " + sb.name + " differ in element size or kind and cannot swap");
+  auto &x = s.state(a), &y = s.state(b);
+  std::swap(x.buffer, y.buffer);
+  std::swap(x.count, y.count);
+  std::swap(x.capacity, y.capacity);
+  std::swap(x.known, y.known);
+}
+
+const Buffer& Scheduler::buffer(StreamId stream) const { return state_->state(stream).buffer; }
+
+void Scheduler::set(ParamId param, const void* bytes, std::size_t size)
+{
+  auto& s = *state_;
+  const auto& spec = s.graph.params().at(param.index);
+  if (size != spec.bytes)
+    throw Error("parameter " + spec.name + " takes " + std::to_string(spec.bytes) + " bytes, not " + std::to_string(size));
+  auto& v = s.params[param.index];
+  v.assign(static_cast<const unsigned char*>(bytes), static_cast<const unsigned char*>(bytes) + size);
+}
+
+const StreamGraph& Scheduler::graph() const { return state_->graph; }
+
+std::vector<std::string> Scheduler::execution_order() const
+{
+  std::vector<std::string> names;
+  for (const auto& p : state_->passes) names.push_back(p.spec->name);
+  return names;
+}
+
+const RunStats& Scheduler::stats() const { return state_->stats; }
+Registration Scheduler::registration() const { return state_->options.registration; }
+
+}  // namespace cstreams::runtime

@@ -1,0 +1,141 @@
+#include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/stream_graph.hpp>
+
+#include <algorithm>
+#include <cctype>
+
+namespace cstreams::runtime {
+
+const char* to_string(Registration registration) noexcept
+{
+  switch (registration) {
+    case Registration::global_atomic: return "global-atomic";
+    case Registration::segmented_lock: return "segmented-lock";
+    case Registration::lock_free: return "lock-free";
+  }
+  return "?";
+}
+
+Registration parse_registration(std::string_view text)
+{
+  std::string t(text);
+  std::replace(t.begin(), t.end(), '_', '-');
+  for (auto r : {Registration::global_atomic, Registration::segmented_lock, Registration::lock_free})
+    if (t == to_string(r)) return r;
+  throw Error("unknown registration '" + std::string(text) + "' (global-atomic, segmented-lock or lock-free)");
+}
+
+StreamId StreamGraph::fixed(std::string name, std::size_t element_bytes, std::size_t count)
+{
+  if (element_bytes == 0 || element_bytes % 4 != 0)
+    throw Error("stream " + name + ": element size " + std::to_string(element_bytes) + " is not a multiple of 4 bytes");
+  streams_.push_back({std::move(name), element_bytes, false, count});
+  return StreamId{std::uint32_t(streams_.size() - 1)};
+}
+
+StreamId StreamGraph::variable(std::string name, std::size_t element_bytes, std::size_t initial_capacity)
+{
+  StreamId id = fixed(std::move(name), element_bytes, initial_capacity);
+  streams_.back().variable = true;
+  return id;
+}
+
+ParamId StreamGraph::param(std::string name, std::size_t bytes)
+{
+  params_.push_back({std::move(name), bytes});
+  return ParamId{std::uint32_t(params_.size() - 1)};
+}
+
+PassSpec& StreamGraph::pass(std::string name, KernelRef kernel)
+{
+  passes_.emplace_back();
+  passes_.back().name = std::move(name);
+  passes_.back().kernel = std::move(kernel);
+  return passes_.back();
+}
+
+const StreamSpec& StreamGraph::stream(StreamId s) const
+{
+  if (s.index >= streams_.size()) throw Error("unknown stream id " + std::to_string(s.index));
+  return streams_[s.index];
+}
+
+std::vector<StreamId> pass_outputs(const PassSpec& p)
+{
+  std::vector<StreamId> out = p.writes;
+  out.insert(out.end(), p.emits.begin(), p.emits.end());
+  if (p.culls()) out.push_back(p.cull_target);
+  return out;
+}
+
+std::vector<StreamId> pass_inputs(const PassSpec& p)
+{
+  std::vector<StreamId> in = p.reads;
+  in.push_back(p.over);
+  if (p.culls()) in.push_back(p.cull_source);
+  const auto outputs = pass_outputs(p);
+  for (const auto& a : p.args)
+    if (auto b = std::get_if<BufferArg>(&a))
+      if (std::find(outputs.begin(), outputs.end(), b->stream) == outputs.end()) in.push_back(b->stream);
+  return in;
+}
+
+std::vector<std::size_t> StreamGraph::schedule() const
+{
+  std::vector<long> writer(streams_.size(), -1);
+  for (std::size_t p = 0; p < passes_.size(); ++p) {
+    const auto& pass = passes_[p];
+    if (pass.over.index >= streams_.size()) throw Error("pass " + pass.name + " has no stream to launch over");
+    for (std::size_t q = 0; q < p; ++q)
+      if (passes_[q].name == pass.name) throw Error("two passes are named " + pass.name);
+    if (pass.culls() && pass.cull_source != pass.over)
+      throw Error("pass " + pass.name + " culls " + stream(pass.cull_source).name + " but is launched over " +
+                  stream(pass.over).name);
+    for (StreamId s : pass_outputs(pass)) {
+      const auto& spec = stream(s);
+      if (writer[s.index] >= 0)
+        throw Error("stream " + spec.name + " is written by both " + passes_[writer[s.index]].name + " and " + pass.name);
+      writer[s.index] = long(p);
+    }
+    for (StreamId s : pass.emits)
+      if (!stream(s).variable) throw Error("pass " + pass.name + " emits into fixed-length stream " + stream(s).name);
+    for (StreamId s : pass.writes)
+      if (stream(s).variable)
+        throw Error("pass " + pass.name + " writes variable-length stream " + stream(s).name + " without emitting");
+    if (pass.culls() && !stream(pass.cull_target).variable)
+      throw Error("pass " + pass.name + " compacts into fixed-length stream " + stream(pass.cull_target).name);
+  }
+
+  std::vector<std::vector<std::size_t>> deps(passes_.size());
+  for (std::size_t p = 0; p < passes_.size(); ++p) {
+    const auto outputs = pass_outputs(passes_[p]);
+    for (StreamId s : pass_inputs(passes_[p])) {
+      if (std::find(outputs.begin(), outputs.end(), s) != outputs.end())
+        throw Error("pass " + passes_[p].name + " both reads and writes stream " + stream(s).name);
+      if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
+    }
+  }
+
+  std::vector<std::size_t> order;
+  std::vector<bool> done(passes_.size(), false);
+  while (order.size() < passes_.size()) {
+    bool progressed = false;
+    for (std::size_t p = 0; p < passes_.size() && !progressed; ++p) {
+      if (done[p]) continue;
+      if (std::all_of(deps[p].begin(), deps[p].end(), [&](std::size_t d) { return done[d]; })) {
+        done[p] = true;
+        order.push_back(p);
+        progressed = true;
+      }
+    }
+    if (!progressed) {
+      std::string stuck;
+      for (std::size_t p = 0; p < passes_.size(); ++p)
+        if (!done[p]) stuck += (stuck.empty() ? "" : ", ") + passes_[p].name;
+      throw Error("the stream graph has a cycle among passes " + stuck);
+    }
+  }
+  return order;
+}
+
+}  // namespace cstreams::runtime

@@ -1,0 +1,135 @@
+// Benchmark of the runtime's primitives against Boost.Compute and a single global
+// atomic counter. Prints a Markdown table (the one in BENCHMARKS.md):
+//   build/bin/bench_runtime [--sizes 1000000,4000000] [--repeat 15]
+// Times are wall-clock medians after one warm-up, each repeat ending in clFinish (or
+// the scheduler's own blocking counter read), so launches and host round trips count.
+#include "../support/test_device.hpp"
+
+#include <cstreams/runtime/baselines.hpp>
+#include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/primitives.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <random>
+
+using namespace cstreams::runtime;
+
+namespace {
+
+double median_ms(int repeat, const std::function<void()>& op)
+{
+  op();
+  std::vector<double> ms;
+  for (int r = 0; r < repeat; ++r) {
+    const auto start = std::chrono::steady_clock::now();
+    op();
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
+  return ms[ms.size() / 2];
+}
+
+void row(const char* op, const char* impl, std::size_t items, std::size_t outputs, double ms)
+{
+  std::printf("| %-12s | %-22s | %10zu | %10zu | %9.3f | %9.1f |\n", op, impl, items, outputs, ms,
+              double(items) / ms / 1e3);
+}
+
+void require(bool ok, const std::string& what)
+{
+  if (!ok) throw Error("benchmark self-check failed: " + what);
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+try {
+  CLI::App app{"cstreams runtime benchmark: scan, compaction and stream registration"};
+  std::vector<std::size_t> sizes{1'000'000, 4'000'000, 16'000'000};
+  int repeat = 15;
+  app.add_option("--sizes", sizes, "item counts")->delimiter(',');
+  app.add_option("--repeat", repeat, "timed repeats after one warm-up")->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  auto& ctx = cstreams::test::device();
+  const auto& d = ctx.device();
+  std::printf("Device: %s (%s, driver %s, %u compute units, work-group %zu)\n\n", d.name.c_str(),
+              d.platform_name.c_str(), d.driver_version.c_str(), d.compute_units, ctx.work_group_size());
+  std::printf("| operation    | implementation         |      items |    output | median ms |  Mitems/s |\n");
+  std::printf("|--------------|------------------------|-----------:|----------:|----------:|----------:|\n");
+
+  Scan scan(ctx);
+  Compactor compactor(ctx, scan);
+  BoostComputeBaselines boost(ctx);
+  const Kernel flag_odd = ctx.programs().kernel("kernels/stream_test.cl", "test_flag_odd", "-DCS_REGISTRATION=2");
+
+  for (std::size_t n : sizes) {
+    std::mt19937 rng{std::uint32_t(n)};
+    std::vector<cl_uint> values(n);
+    for (auto& v : values) v = rng() % 1000;
+    Buffer in(ctx, n * 4, "values"), out(ctx, n * 4, "out"), flags(ctx, n * 4, "flags"), counters(ctx, 4, "c");
+    ctx.write(in, values.data(), n * 4);
+
+    std::vector<cl_uint> ours(n), theirs(n);
+    const double scan_ours = median_ms(repeat, [&] {
+      scan.exclusive(in, out, n, counters, 0);
+      ctx.finish();
+    });
+    ctx.read(out, ours.data(), n * 4);
+    const double scan_boost = median_ms(repeat, [&] {
+      boost.exclusive_scan(in, out, n);
+      ctx.finish();
+    });
+    ctx.read(out, theirs.data(), n * 4);
+    require(ours == theirs, "scan results differ from Boost.Compute's");
+    row("scan", "cstreams", n, n, scan_ours);
+    row("scan", "Boost.Compute", n, n, scan_boost);
+
+    const std::size_t odd = std::size_t(std::count_if(values.begin(), values.end(), [](cl_uint v) { return v & 1; }));
+    const double compact_ours = median_ms(repeat, [&] {
+      flag_odd.set_args(in, cl_uint(n), flags);
+      ctx.launch(flag_odd, n, ctx.work_group_size());
+      compactor.compact(in, 1, flags, n, out, n, counters, 0);
+      ctx.finish();
+    });
+    cl_uint kept = 0;
+    ctx.read(counters, &kept, 4);
+    require(kept == odd, "compaction kept the wrong number of items");
+    std::size_t boost_kept = 0;
+    const double compact_boost = median_ms(repeat, [&] {
+      boost_kept = boost.copy_if_odd(in, out, n);
+      ctx.finish();
+    });
+    require(boost_kept == odd, "Boost.Compute copy_if kept the wrong number of items");
+    row("compaction", "cstreams (flag+scan)", n, odd, compact_ours);
+    row("compaction", "Boost.Compute copy_if", n, odd, compact_boost);
+
+    for (auto registration : {Registration::global_atomic, Registration::segmented_lock, Registration::lock_free}) {
+      StreamGraph g;
+      auto input = g.fixed("values", 4, n);
+      auto pairs = g.variable("pairs", 8, 1);
+      g.pass("expand", {"kernels/stream_test.cl", "test_expand"})
+          .launch_over(input)
+          .emit(pairs)
+          .arg(buffer_of(input))
+          .arg(count_of(input));
+      Scheduler scheduler(ctx, g, {registration, false});
+      scheduler.upload(input, values);
+      const double ms = median_ms(repeat, [&] { scheduler.run(); });
+      const std::string name = registration == Registration::global_atomic
+                                   ? "single atomic counter"
+                                   : std::string(to_string(registration));
+      row("registration", name.c_str(), n, scheduler.count(pairs), ms);
+    }
+  }
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "bench_runtime: %s\n", e.what());
+  return 1;
+}

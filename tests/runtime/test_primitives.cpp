@@ -1,0 +1,104 @@
+#include "../support/test_device.hpp"
+
+#include <cstreams/runtime/primitives.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <numeric>
+#include <random>
+
+using namespace cstreams::runtime;
+
+namespace {
+std::vector<cl_uint> random_values(std::size_t n, std::uint32_t seed, cl_uint max_value)
+{
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<cl_uint> dist(0, max_value);
+  std::vector<cl_uint> v(n);
+  for (auto& x : v) x = dist(rng);
+  return v;
+}
+
+std::vector<std::size_t> sizes_around_powers_of_two(std::size_t up_to)
+{
+  std::vector<std::size_t> sizes{0, 1, 2, 3};
+  for (std::size_t p = 4; p <= up_to; p *= 2)
+    for (std::size_t s : {p - 1, p, p + 1}) sizes.push_back(s);
+  return sizes;
+}
+
+void check_scan(std::size_t n, bool in_place)
+{
+  auto& ctx = cstreams::test::device();
+  Scan scan(ctx);
+  const auto values = random_values(n, std::uint32_t(n), 1000);
+  Buffer in(ctx, n * 4, "scan input"), out(ctx, n * 4, "scan output"), counters(ctx, 8, "counters");
+  ctx.write(in, values.data(), n * 4);
+  ctx.fill_u32(counters, 0xdeadbeef, 0, 2);
+  scan.exclusive(in, in_place ? in : out, n, counters, 1);
+  std::vector<cl_uint> result(n), totals(2);
+  ctx.read(in_place ? in : out, result.data(), n * 4);
+  ctx.read(counters, totals.data(), 8);
+
+  std::vector<cl_uint> expected(n);
+  std::exclusive_scan(values.begin(), values.end(), expected.begin(), cl_uint(0));
+  INFO("n = " << n);
+  CHECK(result == expected);
+  CHECK(totals[1] == std::accumulate(values.begin(), values.end(), cl_uint(0)));
+  CHECK(totals[0] == 0xdeadbeef);  // other slots untouched
+}
+
+void check_compaction(std::size_t n, std::size_t capacity_factor_percent)
+{
+  auto& ctx = cstreams::test::device();
+  Scan scan(ctx);
+  Compactor compactor(ctx, scan);
+  // Two-word items check that whole elements move, not words.
+  std::vector<cl_uint> items(2 * n);
+  std::vector<cl_uint> keep = random_values(n, std::uint32_t(n) + 7, 1);
+  for (std::size_t i = 0; i < n; ++i) items[2 * i] = cl_uint(i), items[2 * i + 1] = cl_uint(~i);
+  std::vector<cl_uint> expected;
+  for (std::size_t i = 0; i < n; ++i)
+    if (keep[i]) expected.insert(expected.end(), {cl_uint(i), cl_uint(~i)});
+  const std::size_t kept = expected.size() / 2;
+  const std::size_t capacity = kept * capacity_factor_percent / 100;
+
+  Buffer src(ctx, n * 8, "src"), flags(ctx, n * 4, "flags"), dst(ctx, capacity * 8, "dst"), counters(ctx, 4, "c");
+  ctx.write(src, items.data(), n * 8);
+  ctx.write(flags, keep.data(), n * 4);
+  compactor.compact(src, 2, flags, n, dst, capacity, counters, 0);
+  cl_uint count = 0;
+  ctx.read(counters, &count, 4);
+  std::vector<cl_uint> result(2 * std::min(capacity, kept));
+  ctx.read(dst, result.data(), result.size() * 4);
+  INFO("n = " << n << ", capacity = " << capacity);
+  CHECK(count == kept);  // the count is exact even when the destination is too small
+  CHECK(std::equal(result.begin(), result.end(), expected.begin()));
+}
+}  // namespace
+
+TEST_CASE("exclusive scan equals the host's at sizes 0, 1, 2^k-1, 2^k, 2^k+1", "[runtime][scan][quick]")
+{
+  for (std::size_t n : sizes_around_powers_of_two(std::size_t(1) << 17)) check_scan(n, false);
+  check_scan(100000, true);
+}
+
+TEST_CASE("exclusive scan equals the host's at millions of items", "[runtime][scan][slow]")
+{
+  for (std::size_t n : {std::size_t(1) << 22, (std::size_t(1) << 22) + 1, std::size_t(5'000'011)}) check_scan(n, false);
+  // Three recursion levels: more tiles than one tile can scan.
+  check_scan(std::size_t(9'000'001), true);
+}
+
+TEST_CASE("compaction keeps flagged items in order and counts past capacity", "[runtime][compaction][quick]")
+{
+  for (std::size_t n : sizes_around_powers_of_two(std::size_t(1) << 16)) check_compaction(n, 100);
+  check_compaction(50000, 50);
+  check_compaction(50000, 0);
+}
+
+TEST_CASE("compaction at millions of items", "[runtime][compaction][slow]")
+{
+  check_compaction(std::size_t(1) << 22, 100);
+  check_compaction(3'000'017, 100);
+}

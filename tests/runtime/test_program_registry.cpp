@@ -1,0 +1,67 @@
+#include "../support/test_device.hpp"
+
+#include <cstreams/runtime/error.hpp>
+
+#include <catch2/catch.hpp>
+
+using namespace cstreams::runtime;
+
+TEST_CASE("includes expand between #line markers that name the real files", "[runtime][registry][quick]")
+{
+  auto& registry = cstreams::test::device().programs();
+  const std::string source = registry.expanded_source("kernels/stream_test.cl");
+  CHECK_THAT(source, Catch::StartsWith("#line 1 \"kernels/stream_test.cl\"\n"));
+  CHECK_THAT(source, Catch::Contains("#line 1 \"runtime/registration.h\""));
+  CHECK_THAT(source, Catch::Contains("#line 1 \"runtime/common.h\""));
+  // After the include the next line of stream_test.cl (line 4) resumes with its number.
+  CHECK_THAT(source, Catch::Contains("#line 4 \"kernels/stream_test.cl\""));
+  // common.h is included by registration.h only once although two files ask for it.
+  const auto first = source.find("#line 1 \"runtime/common.h\"");
+  CHECK(source.find("#line 1 \"runtime/common.h\"", first + 1) == std::string::npos);
+}
+
+TEST_CASE("a kernel that fails to build raises an error carrying the build log", "[runtime][registry][quick]")
+{
+  auto& registry = cstreams::test::device().programs();
+  try {
+    registry.kernel("kernels/broken.cl", "broken");
+    FAIL("the broken kernel built");
+  } catch (const BuildError& e) {
+    CHECK(e.program() == "kernels/broken.cl");
+    CHECK_THAT(e.log(), Catch::Contains("undeclared_identifier"));
+    CHECK_THAT(e.log(), Catch::Contains("broken.cl:6"));
+    CHECK_THAT(std::string(e.what()), Catch::Contains("kernels/broken.cl"));
+  }
+}
+
+TEST_CASE("an include that is not embedded is reported with file and line", "[runtime][registry][quick]")
+{
+  auto& registry = cstreams::test::device().programs();
+  static const char text[] = "#include \"runtime/common.h\"\n#include \"nowhere.h\"\n";
+  registry.add_sources({{"kernels/missing_include.cl", text}});
+  CHECK_THROWS_WITH(registry.expanded_source("kernels/missing_include.cl"),
+                    Catch::Contains("kernels/missing_include.cl:2") && Catch::Contains("nowhere.h"));
+}
+
+TEST_CASE("kernels are created once per program and options", "[runtime][registry][quick]")
+{
+  auto& registry = cstreams::test::device().programs();
+  const std::string lock_free = "-DCS_REGISTRATION=2";
+  const Kernel a = registry.kernel("kernels/stream_test.cl", "test_square", lock_free);
+  const std::size_t built = registry.programs_built();
+  const Kernel b = registry.kernel("kernels/stream_test.cl", "test_square", lock_free);
+  CHECK(a.get() == b.get());
+  CHECK(registry.programs_built() == built);
+  const Kernel c = registry.kernel("kernels/stream_test.cl", "test_square", lock_free + " -DOTHER_OPTION=1");
+  CHECK(c.get() != a.get());
+  CHECK(registry.programs_built() == built + 1);
+  CHECK(registry.cache_key("kernels/stream_test.cl", "") != registry.cache_key("kernels/stream_test.cl", "-DX=1"));
+  CHECK_THAT(registry.device_options(), Catch::Contains("-DCS_WG_SIZE="));
+}
+
+TEST_CASE("emitting kernels built without a registration mode fail to compile clearly", "[runtime][registry][quick]")
+{
+  auto& registry = cstreams::test::device().programs();
+  CHECK_THROWS_WITH(registry.kernel("kernels/stream_test.cl", "test_expand"),
+                    Catch::Contains("cs_registration_mode_is_set_by_the_scheduler"));
+}

@@ -1,0 +1,188 @@
+#include "../support/test_device.hpp"
+#include "stream_test_reference.hpp"
+
+#include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+
+using namespace cstreams::runtime;
+using cstreams::test::Pair;
+using cstreams::test::Quad;
+
+namespace {
+
+const char* const program = "kernels/stream_test.cl";
+
+// values -> (square) squares;  values -> (expand) pairs -> (cull) kept -> (split) even + odd.
+// `split` reads the variable stream `kept`, so the scheduler must end a stage before it.
+struct TestGraph {
+  StreamGraph graph;
+  StreamId values, squares, pairs, kept, even, odd;
+
+  TestGraph(std::size_t n, std::size_t capacity)
+  {
+    values = graph.fixed("values", 4, n);
+    squares = graph.fixed("squares", 4, n);
+    pairs = graph.variable("pairs", 8, capacity);
+    kept = graph.variable("kept", 8, capacity);
+    even = graph.variable("even", 4, capacity);
+    odd = graph.variable("odd", 16, capacity);
+    // Declared out of order on purpose: the scheduler must put split last.
+    graph.pass("split", {program, "test_split"})
+        .launch_over(kept)
+        .read(squares)
+        .emit(even)
+        .emit(odd)
+        .arg(buffer_of(kept))
+        .arg(count_of(kept))
+        .arg(buffer_of(squares));
+    graph.pass("expand", {program, "test_expand"})
+        .launch_over(values)
+        .emit(pairs)
+        .arg(buffer_of(values))
+        .arg(count_of(values));
+    graph.pass("square", {program, "test_square"})
+        .launch_over(values)
+        .write(squares)
+        .arg(buffer_of(values))
+        .arg(count_of(values))
+        .arg(buffer_of(squares));
+    graph.pass("cull", {program, "test_keep"}).launch_over(pairs).cull(pairs, kept).arg(buffer_of(pairs)).arg(count_of(pairs));
+  }
+};
+
+std::vector<std::uint32_t> random_values(std::size_t n, std::uint32_t seed)
+{
+  std::mt19937 rng(seed);
+  std::vector<std::uint32_t> v(n);
+  for (auto& x : v) x = rng();
+  return v;
+}
+
+template <class T> std::vector<T> sorted(std::vector<T> v)
+{
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+void check_graph(std::size_t n, Registration registration, std::size_t capacity, std::uint32_t seed)
+{
+  auto& ctx = cstreams::test::device();
+  TestGraph t(n, capacity);
+
+  Scheduler scheduler(ctx, t.graph, {registration, true});
+  CHECK(scheduler.execution_order() == std::vector<std::string>{"expand", "square", "cull", "split"});
+
+  const auto values = random_values(n, seed);
+  const auto expected = cstreams::test::reference(values);
+  scheduler.upload(t.values, values);
+  for (int frame = 0; frame < 2; ++frame) {
+    scheduler.run();
+    INFO("n = " << n << ", registration = " << to_string(registration) << ", capacity = " << capacity
+                << ", frame = " << frame);
+    auto pairs = scheduler.download<Pair>(t.pairs);
+    auto kept = scheduler.download<Pair>(t.kept);
+    auto even = scheduler.download<std::uint32_t>(t.even);
+    auto odd = scheduler.download<Quad>(t.odd);
+    if (registration == Registration::lock_free) {
+      // Per-thread segments merged in thread order reproduce the sequential order.
+      CHECK(pairs == expected.pairs);
+      CHECK(kept == expected.kept);
+      CHECK(even == expected.even);
+      CHECK(odd == expected.odd);
+    } else {
+      CHECK(sorted(pairs) == sorted(expected.pairs));
+      CHECK(sorted(kept) == sorted(expected.kept));
+      CHECK(sorted(even) == sorted(expected.even));
+      CHECK(sorted(odd) == sorted(expected.odd));
+    }
+    const auto& stats = scheduler.stats();
+    if (frame == 1) {
+      // Capacities grown in the first frame are kept: the steady state reruns nothing.
+      for (const auto& p : stats.passes) CHECK(p.reruns == 0);
+      CHECK(stats.readbacks == 3);  // one per stage: after expand, after cull, after split
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the scheduler orders passes and matches the host for every registration", "[runtime][scheduler][quick]")
+{
+  for (auto registration : {Registration::lock_free, Registration::segmented_lock, Registration::global_atomic})
+    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(255), std::size_t(257), std::size_t(20000)})
+      check_graph(n, registration, 1 << 16, std::uint32_t(n) + 1);
+}
+
+TEST_CASE("tiny capacities grow and rerun without losing an item", "[runtime][scheduler][quick]")
+{
+  for (auto registration : {Registration::lock_free, Registration::segmented_lock, Registration::global_atomic})
+    for (std::size_t capacity : {std::size_t(0), std::size_t(1), std::size_t(37)})
+      check_graph(30011, registration, capacity, 99);
+}
+
+TEST_CASE("random sizes up to millions of items", "[runtime][scheduler][slow]")
+{
+  std::mt19937 rng(2011);
+  std::uniform_int_distribution<std::size_t> size(0, 3'000'000);
+  for (auto registration : {Registration::lock_free, Registration::segmented_lock, Registration::global_atomic}) {
+    check_graph(size(rng), registration, 1, std::uint32_t(rng()));
+    check_graph(size(rng), registration, 1 << 20, std::uint32_t(rng()));
+  }
+}
+
+TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  auto values = g.fixed("values", 4, 0);
+  auto pairs = g.variable("pairs", 8, 1);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  s.upload(values, random_values(5000, 3));
+  s.run();
+  const auto expected = cstreams::test::reference(random_values(5000, 3)).pairs;
+  CHECK(s.count(pairs) == expected.size());
+  CHECK(s.capacity(pairs) >= expected.size());
+  REQUIRE(s.stats().passes.size() == 1);
+  CHECK(s.stats().passes[0].reruns >= 1);
+  CHECK(s.stats().passes[0].device_ns > 0);
+  CHECK(s.stats().streams[1].bytes >= expected.size() * 8);
+  CHECK(s.stats().scratch_bytes > 0);
+}
+
+TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
+{
+  StreamGraph g;
+  auto a = g.variable("a", 4, 1);
+  auto b = g.variable("b", 4, 1);
+  auto f = g.fixed("f", 4, 1);
+  g.pass("p", {program, "k"}).launch_over(a).emit(b);
+  g.pass("q", {program, "k"}).launch_over(b).emit(a);
+  CHECK_THROWS_WITH(g.schedule(), Catch::Contains("cycle") && Catch::Contains("p") && Catch::Contains("q"));
+
+  StreamGraph two;
+  auto x = two.fixed("x", 4, 1);
+  auto y = two.variable("y", 4, 1);
+  two.pass("p", {program, "k"}).launch_over(x).emit(y);
+  two.pass("q", {program, "k"}).launch_over(x).emit(y);
+  CHECK_THROWS_WITH(two.schedule(), Catch::Contains("stream y is written by both p and q"));
+
+  StreamGraph self;
+  auto z = self.variable("z", 4, 1);
+  self.pass("p", {program, "k"}).launch_over(z).emit(z);
+  CHECK_THROWS_WITH(self.schedule(), Catch::Contains("both reads and writes stream z"));
+
+  StreamGraph fixed_emit;
+  auto u = fixed_emit.fixed("u", 4, 1);
+  auto v = fixed_emit.fixed("v", 4, 1);
+  fixed_emit.pass("p", {program, "k"}).launch_over(u).emit(v);
+  CHECK_THROWS_WITH(fixed_emit.schedule(), Catch::Contains("emits into fixed-length stream v"));
+
+  CHECK_THROWS_WITH(StreamGraph().fixed("odd", 6, 1), Catch::Contains("multiple of 4"));
+  (void)f;
+}
