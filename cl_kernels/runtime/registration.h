@@ -29,10 +29,12 @@
       __global uint* P##_counters, const uint P##_slot
 
 #if !defined(CS_REGISTRATION)
-/* Built outside a scheduler: any use of an emitter fails to compile with this name. */
-#define CS_EMITTER_BEGIN(P) cs_registration_mode_is_set_by_the_scheduler()
-#define CS_EMIT(P, value) cs_registration_mode_is_set_by_the_scheduler()
-#define CS_EMITTER_END(P) cs_registration_mode_is_set_by_the_scheduler()
+/* Built outside a scheduler: any use of an emitter fails to compile with this name
+ * (an undeclared identifier is a compile error everywhere; an undeclared function
+ * only fails at link time on some drivers, with a vaguer message). */
+#define CS_EMITTER_BEGIN(P) (void)cs_registration_mode_is_set_by_the_scheduler
+#define CS_EMIT(P, value) (void)cs_registration_mode_is_set_by_the_scheduler
+#define CS_EMITTER_END(P) (void)cs_registration_mode_is_set_by_the_scheduler
 
 #elif CS_REGISTRATION == CS_REG_GLOBAL_ATOMIC
 #define CS_EMITTER_BEGIN(P) (void)P##_counts

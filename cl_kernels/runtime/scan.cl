@@ -5,7 +5,9 @@
  * they run in lockstep, so the same code is right on pocl, NVIDIA and AMD. */
 #include "common.h"
 
-#define CS_SCAN_ITEMS 8
+#ifndef CS_SCAN_ITEMS
+#error "CS_SCAN_ITEMS (items per work-item) is chosen by the host's Scan for the device"
+#endif
 #define CS_SCAN_TILE (CS_WG_SIZE * CS_SCAN_ITEMS)
 /* One padding word every 32 keeps a work-item's consecutive items in distinct banks. */
 #define CS_PAD(i) ((i) + ((i) >> 5))

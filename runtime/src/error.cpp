@@ -10,17 +10,21 @@ std::string describe(cl_int status, const std::string& call, const std::string& 
   return text;
 }
 
-std::string first_error_line(const std::string& log)
+// The line of a build log that best says what failed: the first one naming an error,
+// else the last non-empty one (some drivers only say "fatal" or end with a summary).
+std::string headline(const std::string& log)
 {
+  std::string last;
   std::size_t start = 0;
   while (start < log.size()) {
     std::size_t end = log.find('\n', start);
     if (end == std::string::npos) end = log.size();
     std::string line = log.substr(start, end - start);
-    if (line.find("error") != std::string::npos) return line;
+    if (line.find("error") != std::string::npos || line.find("fatal") != std::string::npos) return line;
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
     start = end + 1;
   }
-  return {};
+  return last.empty() ? "the compiler gave no log" : last;
 }
 }  // namespace
 
@@ -32,8 +36,7 @@ ClError::ClError(cl_int status, std::string call, std::string context)
 // what() stays one line (the first compiler error) so a CLI can print it as is;
 // log() carries the whole compiler output.
 BuildError::BuildError(std::string program, std::string device, std::string options, std::string log)
-    : Error("building OpenCL program " + program + " for " + device + " failed: " +
-            (first_error_line(log).empty() ? std::string("see build log") : first_error_line(log)) +
+    : Error("building OpenCL program " + program + " for " + device + " failed: " + headline(log) +
             " [options: " + options + "]"),
       program_(std::move(program)),
       log_(std::move(log))

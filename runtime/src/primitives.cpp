@@ -4,8 +4,15 @@
 namespace cstreams::runtime {
 
 namespace {
-// Must match CS_SCAN_ITEMS in scan.cl.
-constexpr std::size_t scan_items_per_work_item = 8;
+// Items each work-item scans sequentially. GPUs want many work-items and a small tile
+// in local memory; on a CPU every barrier is a loop over the work-group, so pocl does
+// best with long sequential runs and few barriers per item.
+std::size_t scan_items_for(const DeviceInfo& device) { return device.kind == DeviceKind::cpu ? 32 : 8; }
+
+std::string scan_options(const DeviceInfo& device)
+{
+  return "-DCS_SCAN_ITEMS=" + std::to_string(scan_items_for(device));
+}
 
 void ensure(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
 {
@@ -15,12 +22,13 @@ void ensure(Context& context, Buffer& buffer, std::size_t bytes, const char* lab
 
 Scan::Scan(Context& context)
     : context_(context),
-      reduce_(context.programs().kernel("runtime/scan.cl", "cs_scan_reduce")),
-      tiles_(context.programs().kernel("runtime/scan.cl", "cs_scan_tiles"))
+      items_per_work_item_(scan_items_for(context.device())),
+      reduce_(context.programs().kernel("runtime/scan.cl", "cs_scan_reduce", scan_options(context.device()))),
+      tiles_(context.programs().kernel("runtime/scan.cl", "cs_scan_tiles", scan_options(context.device())))
 {
 }
 
-std::size_t Scan::tile_items() const { return context_.work_group_size() * scan_items_per_work_item; }
+std::size_t Scan::tile_items() const { return context_.work_group_size() * items_per_work_item_; }
 
 std::size_t Scan::scratch_bytes() const
 {

@@ -33,6 +33,7 @@ private:
              std::size_t depth, Timeline* timeline, const char* label);
 
   Context& context_;
+  std::size_t items_per_work_item_;
   Kernel reduce_;
   Kernel tiles_;
   std::vector<Buffer> levels_;
