@@ -1,0 +1,49 @@
+#include <cstreams/contacts.hpp>
+#include <cstreams/errors.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <ostream>
+#include <tuple>
+
+namespace cstreams {
+
+bool canonical_less(const Contact& a, const Contact& b)
+{
+  return std::tie(a.kind, a.object_a, a.object_b, a.v, a.toi) < std::tie(b.kind, b.object_a, b.object_b, b.v, b.toi);
+}
+
+void sort_canonical(std::vector<Contact>& contacts) { std::sort(contacts.begin(), contacts.end(), canonical_less); }
+
+void write_contacts_csv(std::ostream& out, const std::vector<Contact>& contacts)
+{
+  out << "kind,object_a,object_b,v0,v1,v2,v3,toi\n";
+  char row[160];
+  for (const auto& c : contacts) {
+    std::snprintf(row, sizeof row, "%s,%u,%u,%u,%u,%u,%u,%.17g\n", c.kind == ContactKind::vertex_face ? "vf" : "ee",
+                  c.object_a, c.object_b, c.v[0], c.v[1], c.v[2], c.v[3], c.toi);
+    out << row;
+  }
+}
+
+void write_contacts_csv(const std::string& path, const std::vector<Contact>& contacts)
+{
+  const std::string temporary = path + ".partial";
+  {
+    std::ofstream out(temporary, std::ios::trunc);
+    if (!out) throw InputError(path + ": cannot create file");
+    write_contacts_csv(out, contacts);
+    if (!out.flush()) {
+      out.close();
+      std::remove(temporary.c_str());
+      throw InputError(path + ": write failed");
+    }
+  }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
+    std::remove(temporary.c_str());
+    throw InputError(path + ": cannot move the written file into place");
+  }
+}
+
+}  // namespace cstreams

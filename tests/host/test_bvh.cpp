@@ -1,0 +1,104 @@
+#include <cstreams/mesh_io.hpp>
+#include <cstreams/reference_ccd.hpp>
+#include <cstreams/scenes/shapes.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <random>
+#include <unistd.h>
+
+using namespace cstreams;
+
+namespace {
+
+Mesh cloth_and_ball(double drop)
+{
+  Mesh m = scenes::sheet(12, 12, 2, 2);
+  for (auto& p : m.positions) p += Vec3(-1, -1, 1.0 - drop + 0.3 * std::sin(3 * p.x()) * std::sin(2 * p.y()));
+  scenes::append(m, scenes::icosphere(2, 0.8, Vec3(0.1, 0, 0)));
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("swept 18-DOPs contain the swept primitive", "[host][bvh][quick]")
+{
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> coord(-1e3, 1e3), unit(0, 1);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<Vec3> x0(3), x1(3);
+    for (int i = 0; i < 3; ++i) {
+      x0[std::size_t(i)] = Vec3(coord(rng), coord(rng), coord(rng));
+      x1[std::size_t(i)] = x0[std::size_t(i)] + Vec3(coord(rng), coord(rng), coord(rng)) * 1e-3;
+    }
+    const std::uint32_t ids[3] = {0, 1, 2};
+    const Kdop18 box = swept_kdop(x0.data(), x1.data(), ids, 3, 0.0);
+    const double t = unit(rng), u = unit(rng), v = unit(rng) * (1 - u);
+    auto at = [&](int i) { return Vec3(x0[std::size_t(i)] + t * (x1[std::size_t(i)] - x0[std::size_t(i)])); };
+    const Vec3 p = (1 - u - v) * at(0) + u * at(1) + v * at(2);
+    Kdop18 point = Kdop18::empty();
+    point.add(p);
+    CHECK(box.overlaps(point));
+    // A point at the minimum separation from the primitive is inside the inflated box.
+    const Kdop18 grown = swept_kdop(x0.data(), x1.data(), ids, 3, 0.5);
+    Kdop18 near = Kdop18::empty();
+    near.add(at(0) + Vec3(0.5, 0, 0) * (trial % 2 ? 1 : -1));
+    CHECK(grown.overlaps(near));
+  }
+}
+
+TEST_CASE("the BVH holds every face once and every node contains its children", "[host][bvh][quick]")
+{
+  const Mesh m = cloth_and_ball(0);
+  const Topology t = build_topology(m.faces, m.positions.size());
+  const SweptBounds b = swept_bounds(t, m.positions, m.positions, 0);
+  const Bvh bvh = build_bvh(b.faces);
+  CHECK(bvh.nodes.size() == 2 * m.faces.size() - 1);
+  std::vector<int> seen(m.faces.size(), 0);
+  for (std::size_t i = 0; i < bvh.nodes.size(); ++i) {
+    const BvhNode& n = bvh.nodes[i];
+    if (n.left < 0) {
+      ++seen[std::size_t(n.face)];
+      continue;
+    }
+    for (int c = 0; c < 2; ++c) {
+      const std::size_t child = std::size_t(n.left + c);
+      CHECK(child > i);
+      CHECK(bvh.nodes[child].parent == std::int32_t(i));
+      Kdop18 merged = bvh.boxes[i];
+      merged.merge(bvh.boxes[child]);
+      CHECK(merged.lo == bvh.boxes[i].lo);
+      CHECK(merged.hi == bvh.boxes[i].hi);
+    }
+  }
+  for (int s : seen) CHECK(s == 1);
+  // Median splits keep the tree balanced.
+  CHECK(bvh.depth() <= std::size_t(std::ceil(std::log2(double(m.faces.size())))) + 1);
+  CHECK(bvh.level_offsets.back() == bvh.nodes.size());
+}
+
+TEST_CASE("BVH traversal and brute force find the same candidates", "[host][bvh][quick]")
+{
+  const Mesh a = cloth_and_ball(0), b = cloth_and_ball(0.45);
+  for (bool split : {false, true}) {
+    char templ[] = "/tmp/cstreams-bvh-XXXXXX";
+    const std::string dir = mkdtemp(templ);
+    // Two frames written to disk, as a user's scene would be.
+    write_ply(dir + "/cstreams_bvh_0.ply", a);
+    write_ply(dir + "/cstreams_bvh_1.ply", b);
+    const Scene scene = scene_from_frames({dir + "/cstreams_bvh_0.ply", dir + "/cstreams_bvh_1.ply"}, split);
+    CHECK(scene.objects.size() == (split ? 2u : 1u));
+    const Step step = load_step(scene, 0);
+    ReferenceOptions bvh, brute;
+    brute.broad_phase = BroadPhase::brute_force;
+    const Candidates x = reference_broad_phase(step, bvh), y = reference_broad_phase(step, brute);
+    CHECK(x.vf_count() > 0);
+    CHECK(x.ee_count() > 0);
+    CHECK(x == y);
+    // With a minimum separation the BVs grow, and so does the candidate set.
+    bvh.solver.min_separation = brute.solver.min_separation = 0.05;
+    const Candidates xs = reference_broad_phase(step, bvh);
+    CHECK(xs == reference_broad_phase(step, brute));
+    CHECK(xs.vf_count() > x.vf_count());
+  }
+}
