@@ -8,6 +8,8 @@ int main(int argc, char** argv)
   CLI::App app{"cstreams: continuous collision detection between deforming triangle meshes on OpenCL devices"};
   app.require_subcommand(1);
   cstreams::cli::add_devices_command(app);
+  cstreams::cli::add_info_command(app);
+  cstreams::cli::add_generate_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

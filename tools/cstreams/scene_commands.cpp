@@ -1,0 +1,119 @@
+#include "commands.hpp"
+
+#include <cstreams/bvh.hpp>
+#include <cstreams/scene.hpp>
+#include <cstreams/scenes/generators.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace cstreams::cli {
+
+namespace {
+
+struct InfoOptions {
+  std::vector<std::string> paths;
+  bool split = false;
+  bool json = false;
+};
+
+// A manifest or mesh file, or several mesh files as the frames of one mesh.
+Scene open_scene(const std::vector<std::string>& paths, bool split)
+{
+  if (paths.size() == 1 && !split) return load_scene(paths[0]);
+  return scene_from_frames(paths, split);
+}
+
+void info(const InfoOptions& o)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const Scene scene = open_scene(o.paths, o.split);
+  const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  nlohmann::json out{{"scene", scene.name}, {"frames", scene.frame_count()}, {"objects", nlohmann::json::array()}};
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  std::size_t orphan_vf = 0, orphan_ee = 0;
+  for (std::uint32_t i = 0; i < scene.objects.size(); ++i) {
+    const SceneObject& obj = scene.objects[i];
+    const auto x = scene.positions(i, 0);
+    for (const auto& p : x) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Bvh bvh = build_bvh(swept_bounds(obj.topology, x, x, 0).faces);
+    nlohmann::json j{{"name", obj.name},
+                     {"kind", to_string(obj.kind)},
+                     {"self_collision", scene.may_collide(i, i)},
+                     {"vertices", obj.topology.vertex_count},
+                     {"edges", obj.topology.edges.size()},
+                     {"faces", obj.topology.faces.size()},
+                     {"bvh_nodes", bvh.nodes.size()},
+                     {"bvh_depth", bvh.depth()}};
+    if (scene.may_collide(i, i)) {
+      const OrphanSet orphans = build_orphans(obj.topology);
+      j["orphan_vf"] = orphans.vf.size();
+      j["orphan_ee"] = orphans.ee.size();
+      orphan_vf += orphans.vf.size();
+      orphan_ee += orphans.ee.size();
+    }
+    out["objects"].push_back(j);
+  }
+  std::size_t edges = 0, nodes = 0;
+  for (const auto& j : out["objects"]) {
+    edges += j["edges"].get<std::size_t>();
+    nodes += j["bvh_nodes"].get<std::size_t>();
+  }
+  out["totals"] = {{"vertices", scene.vertex_count()}, {"edges", edges}, {"faces", scene.face_count()},
+                   {"orphan_vf", orphan_vf}, {"orphan_ee", orphan_ee}, {"bvh_nodes", nodes}};
+  out["bounding_box"] = {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}};
+  out["load_seconds"] = load_s;
+
+  if (o.json) {
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::printf("scene %s: %zu objects, %zu frames, loaded in %.3f s\n", scene.name.c_str(), scene.objects.size(),
+              scene.frame_count(), load_s);
+  std::printf("%-16s %-10s %4s %10s %10s %10s %10s %10s %9s %5s\n", "object", "kind", "self", "vertices", "edges",
+              "faces", "orphan vf", "orphan ee", "bvh nodes", "depth");
+  for (const auto& j : out["objects"])
+    std::printf("%-16s %-10s %4s %10zu %10zu %10zu %10zu %10zu %9zu %5zu\n", j["name"].get<std::string>().c_str(),
+                j["kind"].get<std::string>().c_str(), j["self_collision"].get<bool>() ? "yes" : "no",
+                j["vertices"].get<std::size_t>(), j["edges"].get<std::size_t>(), j["faces"].get<std::size_t>(),
+                j.value("orphan_vf", std::size_t(0)), j.value("orphan_ee", std::size_t(0)),
+                j["bvh_nodes"].get<std::size_t>(), j["bvh_depth"].get<std::size_t>());
+  std::printf("%-16s %-10s %4s %10zu %10zu %10zu %10zu %10zu %9zu\n", "total", "", "", scene.vertex_count(), edges,
+              scene.face_count(), orphan_vf, orphan_ee, nodes);
+  std::printf("bounding box (frame 0): [%g, %g, %g] - [%g, %g, %g]\n", lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z());
+}
+
+}  // namespace
+
+void add_info_command(CLI::App& app)
+{
+  auto o = std::make_shared<InfoOptions>();
+  auto* cmd = app.add_subcommand("info", "Describe a scene: objects, topology, orphan pairs, BVH, bounding box");
+  cmd->add_option("scene", o->paths, "A scene manifest (.json), a mesh file, or the frame files of one mesh")
+      ->required();
+  cmd->add_flag("--split", o->split, "Treat each connected component of the mesh as an object");
+  cmd->add_flag("--json", o->json, "Print JSON instead of a table");
+  cmd->callback([o] { info(*o); });
+}
+
+void add_generate_command(CLI::App& app)
+{
+  auto o = std::make_shared<scenes::GeneratorOptions>();
+  auto* cmd = app.add_subcommand("generate", "Write a procedural scene (PLY frames and scene.json) into a folder");
+  cmd->add_option("name", o->name, "cloth-sphere, n-body, bart or large-sheet")->required();
+  cmd->add_option("--out", o->folder, "Folder to write into")->required();
+  cmd->add_option("--seed", o->seed, "Random seed (same seed, same files)");
+  cmd->add_option("--frames", o->frames, "Number of frames (default: the scene's)");
+  cmd->add_option("--resolution", o->resolution, "Size parameter (default: the scene's; see README)");
+  cmd->callback([o] { std::printf("%s\n", scenes::generate_scene(*o).c_str()); });
+}
+
+}  // namespace cstreams::cli
