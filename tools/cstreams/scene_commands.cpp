@@ -1,6 +1,7 @@
 #include "commands.hpp"
 
 #include <cstreams/bvh.hpp>
+#include <cstreams/reference_ccd.hpp>
 #include <cstreams/scene.hpp>
 #include <cstreams/scenes/generators.hpp>
 
@@ -91,7 +92,72 @@ void info(const InfoOptions& o)
   std::printf("bounding box (frame 0): [%g, %g, %g] - [%g, %g, %g]\n", lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z());
 }
 
+struct ReferenceCommandOptions {
+  std::vector<std::string> paths;
+  bool split = false;
+  std::string frames;
+  std::string out;
+  bool brute_force = false;
+  ReferenceSolverOptions solver;
+};
+
+// "A:B" steps from frame A up to (not including) B; "A" one step; empty: every step.
+std::pair<std::size_t, std::size_t> step_range(const std::string& text, std::size_t frame_count)
+{
+  const std::size_t steps = frame_count > 1 ? frame_count - 1 : 1;
+  if (text.empty()) return {0, steps};
+  std::size_t a = 0, b = 0;
+  const auto colon = text.find(':');
+  try {
+    a = std::stoul(text.substr(0, colon));
+    b = colon == std::string::npos ? a + 1 : std::stoul(text.substr(colon + 1));
+  } catch (const std::exception&) {
+    throw InputError("--frames '" + text + "' is not A or A:B");
+  }
+  if (a >= b || b > steps)
+    throw InputError("--frames " + text + " is outside the scene's steps 0:" + std::to_string(steps));
+  return {a, b};
+}
+
+void reference(const ReferenceCommandOptions& o)
+{
+  const Scene scene = open_scene(o.paths, o.split);
+  const auto [first, last] = step_range(o.frames, scene.frame_count());
+  ReferenceOptions options;
+  options.solver = o.solver;
+  options.broad_phase = o.brute_force ? BroadPhase::brute_force : BroadPhase::bvh;
+  std::vector<Contact> all;
+  for (std::size_t f = first; f < last; ++f) {
+    const auto start = std::chrono::steady_clock::now();
+    const Step step = load_step(scene, f);
+    const Candidates candidates = reference_broad_phase(step, options);
+    const auto contacts = reference_narrow_phase(step, candidates, options.solver);
+    std::fprintf(stderr, "step %zu: %zu vf + %zu ee candidates, %zu contacts, %.2f s\n", f, candidates.vf_count(),
+                 candidates.ee_count(), contacts.size(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    all.insert(all.end(), contacts.begin(), contacts.end());
+  }
+  if (o.out.empty()) write_contacts_csv(std::cout, all);
+  else write_contacts_csv(o.out, all);
+}
+
 }  // namespace
+
+void add_reference_command(CLI::App& app)
+{
+  auto o = std::make_shared<ReferenceCommandOptions>();
+  auto* cmd = app.add_subcommand("reference",
+                                 "Run the host reference CCD (double precision, never misses) and write contacts as CSV");
+  cmd->add_option("scene", o->paths, "A scene manifest (.json), a mesh file, or the frame files of one mesh")
+      ->required();
+  cmd->add_flag("--split", o->split, "Treat each connected component of the mesh as an object");
+  cmd->add_option("--frames", o->frames, "Steps A:B (from frame A to B), or one step A; default: all");
+  cmd->add_option("--out", o->out, "CSV file (default: standard output)");
+  cmd->add_flag("--brute-force", o->brute_force, "Test every triangle pair instead of traversing BVHs");
+  cmd->add_option("--tolerance", o->solver.tolerance, "Co-domain tolerance, relative to the query's coordinates");
+  cmd->add_option("--min-separation", o->solver.min_separation, "Distance below which primitives count as colliding");
+  cmd->callback([o] { reference(*o); });
+}
 
 void add_info_command(CLI::App& app)
 {
