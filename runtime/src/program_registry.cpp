@@ -46,6 +46,23 @@ std::string build_log(cl_program program, cl_device_id device)
   return log;
 }
 
+// Rewrites "<kernel>:21:" (a line of the expanded source) as "file.cl:6:".
+std::string map_log_locations(const std::string& log, const std::vector<std::string>& origins)
+{
+  static const std::regex location(R"re(<(kernel|source|stdin)>:([0-9]+):)re");
+  std::string out;
+  auto begin = std::sregex_iterator(log.begin(), log.end(), location);
+  std::size_t last = 0;
+  for (auto it = begin; it != std::sregex_iterator(); ++it) {
+    const auto& m = *it;
+    const std::size_t line = std::stoul(m[2].str());
+    out += log.substr(last, std::size_t(m.position()) - last);
+    out += line >= 1 && line <= origins.size() ? origins[line - 1] + ":" : m.str();
+    last = std::size_t(m.position() + m.length());
+  }
+  return out + log.substr(last);
+}
+
 std::string derive_device_options(const DeviceInfo& device, std::size_t work_group_size)
 {
   std::string options = "-cl-std=CL1.2 -DCS_WG_SIZE=" + std::to_string(work_group_size);
@@ -85,44 +102,58 @@ std::string ProgramRegistry::text_of(const std::string& name) const
   return it->second;
 }
 
-void ProgramRegistry::expand(const std::string& name, std::string& out, std::vector<std::string>& stack,
-                             std::vector<std::string>& included) const
+void ProgramRegistry::expand(const std::string& name, Expansion& out) const
 {
-  if (std::find(stack.begin(), stack.end(), name) != stack.end())
+  if (std::find(out.stack.begin(), out.stack.end(), name) != out.stack.end())
     throw Error("OpenCL source " + name + " includes itself");
-  if (std::find(included.begin(), included.end(), name) != included.end()) return;
-  included.push_back(name);
-  stack.push_back(name);
+  if (std::find(out.included.begin(), out.included.end(), name) != out.included.end()) return;
+  out.included.push_back(name);
+  out.stack.push_back(name);
 
   static const std::regex include_line(R"re(^\s*#\s*include\s*"([^"]+)"\s*$)re");
   std::istringstream in(text_of(name));
   std::string line;
   std::size_t number = 0;
-  out += "#line 1 \"" + name + "\"\n";
+  auto emit = [&](const std::string& text, std::size_t origin) {
+    out.text += text;
+    out.text += '\n';
+    out.origins.push_back(name + ":" + std::to_string(origin));
+  };
+  emit("#line 1 \"" + name + "\"", 1);
   while (std::getline(in, line)) {
     ++number;
     std::smatch m;
     if (!std::regex_match(line, m, include_line)) {
-      out += line;
-      out += '\n';
+      emit(line, number);
       continue;
     }
     const std::string relative = folder_of(name) + m[1].str();
     const std::string target = has_source(relative) ? relative : m[1].str();
     if (!has_source(target))
       throw Error(name + ":" + std::to_string(number) + ": included file \"" + m[1].str() + "\" is not embedded");
-    expand(target, out, stack, included);
-    out += "#line " + std::to_string(number + 1) + " \"" + name + "\"\n";
+    expand(target, out);
+    emit("#line " + std::to_string(number + 1) + " \"" + name + "\"", number);
   }
-  stack.pop_back();
+  out.stack.pop_back();
 }
 
 std::string ProgramRegistry::expanded_source(const std::string& program) const
 {
-  std::string out;
-  std::vector<std::string> stack, included;
-  expand(program, out, stack, included);
-  return out;
+  Expansion e;
+  expand(program, e);
+  return e.text;
+}
+
+std::vector<std::string> ProgramRegistry::line_origins(const std::string& program) const
+{
+  Expansion e;
+  expand(program, e);
+  return e.origins;
+}
+
+std::string ProgramRegistry::locate(const std::string& log, const std::string& program) const
+{
+  return map_log_locations(log, line_origins(program));
 }
 
 std::string ProgramRegistry::cache_key(const std::string& program, const std::string& options) const
@@ -137,8 +168,9 @@ ProgramRegistry::Program& ProgramRegistry::program(const std::string& name, cons
   const std::string key = name + "|" + options;
   if (auto it = programs_.find(key); it != programs_.end()) return it->second;
 
-  const std::string source = expanded_source(name);
-  const char* text = source.c_str();
+  Expansion expansion;
+  expand(name, expansion);
+  const char* text = expansion.text.c_str();
   cl_int status = CL_SUCCESS;
   Handle<cl_program> built(clCreateProgramWithSource(context_.get(), 1, &text, nullptr, &status));
   check(status, "clCreateProgramWithSource", "loading " + name);
@@ -147,7 +179,8 @@ ProgramRegistry::Program& ProgramRegistry::program(const std::string& name, cons
   cl_device_id device = context_.device().id;
   status = clBuildProgram(built.get(), 1, &device, all_options.c_str(), nullptr, nullptr);
   if (status == CL_BUILD_PROGRAM_FAILURE || status == CL_INVALID_BUILD_OPTIONS || status == CL_COMPILER_NOT_AVAILABLE)
-    throw BuildError(name, context_.device().name, all_options, build_log(built.get(), device));
+    throw BuildError(name, context_.device().name, all_options,
+                     map_log_locations(build_log(built.get(), device), expansion.origins));
   check(status, "clBuildProgram", "building " + name);
   return programs_.emplace(key, Program{std::move(built), {}}).first->second;
 }

@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 using namespace cstreams::runtime;
 
 TEST_CASE("includes expand between #line markers that name the real files", "[runtime][registry][quick]")
@@ -15,6 +17,10 @@ TEST_CASE("includes expand between #line markers that name the real files", "[ru
   CHECK_THAT(source, Catch::Contains("#line 1 \"runtime/common.h\""));
   // After the include the next line of stream_test.cl (line 4) resumes with its number.
   CHECK_THAT(source, Catch::Contains("#line 4 \"kernels/stream_test.cl\""));
+  // Every expanded line knows where it came from, for compilers that ignore #line.
+  const auto origins = registry.line_origins("kernels/stream_test.cl");
+  CHECK(std::count(source.begin(), source.end(), '\n') == long(origins.size()));
+  CHECK(origins.back().rfind("kernels/stream_test.cl:", 0) == 0);
   // common.h is included by registration.h only once although two files ask for it.
   const auto first = source.find("#line 1 \"runtime/common.h\"");
   CHECK(source.find("#line 1 \"runtime/common.h\"", first + 1) == std::string::npos);
@@ -33,6 +39,19 @@ TEST_CASE("a kernel that fails to build raises an error carrying the build log",
     CHECK_THAT(e.log(), Catch::Contains("broken.cl:6"));
     CHECK_THAT(std::string(e.what()), Catch::Contains("kernels/broken.cl"));
   }
+}
+
+TEST_CASE("build logs that ignore #line are mapped back to files and lines", "[runtime][registry][quick]")
+{
+  auto& registry = cstreams::test::device().programs();
+  // NVIDIA's compiler numbers the expanded source; broken.cl's line 6 is its line 21
+  // after common.h (and its #line markers) is expanded in.
+  const auto origins = registry.line_origins("kernels/broken.cl");
+  const auto at = std::find(origins.begin(), origins.end(), "kernels/broken.cl:6");
+  REQUIRE(at != origins.end());
+  const std::string raw = "<kernel>:" + std::to_string(at - origins.begin() + 1) + ":27: error: use of undeclared identifier";
+  CHECK(registry.locate(raw, "kernels/broken.cl") == "kernels/broken.cl:6:27: error: use of undeclared identifier");
+  CHECK(registry.locate("<kernel>:99999:1: error", "kernels/broken.cl") == "<kernel>:99999:1: error");
 }
 
 TEST_CASE("an include that is not embedded is reported with file and line", "[runtime][registry][quick]")

@@ -53,6 +53,11 @@ public:
 
   // The source as handed to the compiler: includes expanded, #line markers in place.
   std::string expanded_source(const std::string& program) const;
+  // Where each line of the expanded source came from ("file:line"), for compilers
+  // that ignore #line (NVIDIA's reports "<kernel>:21:" for the 21st expanded line).
+  std::vector<std::string> line_origins(const std::string& program) const;
+  // A build log with every "<kernel>:N:" location replaced by its origin.
+  std::string locate(const std::string& log, const std::string& program) const;
   std::size_t programs_built() const { return programs_.size(); }
   // The cache key of a program: source hash, options, platform, device, driver.
   std::string cache_key(const std::string& program, const std::string& options) const;
@@ -64,8 +69,12 @@ private:
   };
   Program& program(const std::string& name, const std::string& options);
   std::string text_of(const std::string& name) const;
-  void expand(const std::string& name, std::string& out, std::vector<std::string>& stack,
-              std::vector<std::string>& included) const;
+  struct Expansion {
+    std::string text;
+    std::vector<std::string> origins;  // per line of text
+    std::vector<std::string> stack, included;
+  };
+  void expand(const std::string& name, Expansion& out) const;
 
   Context& context_;
   std::map<std::string, const char*> sources_;
