@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <queue>
 #include <vector>
 
 namespace cstreams {
@@ -44,15 +43,7 @@ inline IVec3 ivec(const Vec3& v) { return {{exact(v.x()), exact(v.y()), exact(v.
 // One box of the (t, u, v) domain.
 struct Box {
   double t0, t1, u0, u1, v0, v1;
-  double slot;  // floor(t0 / time resolution)
-  int depth;
   double width(int axis) const { return axis == 0 ? t1 - t0 : axis == 1 ? u1 - u0 : v1 - v0; }
-};
-// Earliest time slot first; within a slot the deepest box, so the search dives to one
-// contact instead of sweeping a whole curve of contacts at nearly the same time (as
-// nearly parallel edges have).
-struct Earliest {
-  bool operator()(const Box& a, const Box& b) const { return a.slot != b.slot ? a.slot > b.slot : a.depth < b.depth; }
 };
 
 // The contact function of a query, evaluated with intervals at exact parameters.
@@ -148,29 +139,52 @@ CcdResult solve(const Query& q, bool vertex_face, const ReferenceSolverOptions& 
 {
   const ContactFunction f(q, vertex_face);
   const double tolerance = options.tolerance * query_scale(q);
+  const double resolution = options.time_resolution;
   // The per-axis box test with the separation as half-width contains the ball of that
   // radius, so it never drops a box that comes within min_separation.
   const double separation = options.min_separation;
-  const double resolution = options.time_resolution;
-  // Every box still queued starts no earlier than the slot being worked on, so the
-  // slot's start is a lower bound on the first contact.
-  auto slot_start = [&](const Box& b) { return b.slot * resolution; };
-  std::priority_queue<Box, std::vector<Box>, Earliest> queue;
-  queue.push({0, 1, 0, 1, 0, 1, 0, 0});
+  // Depth first, earlier half first; boxes starting after the earliest contact found
+  // (or less than `resolution` before it) are not refined. A contact reported after
+  // such a skip is moved `resolution` earlier, so it stays a lower bound.
+  std::vector<Box> stack{{0, 1, 0, 1, 0, 1}};
+  double best = 2;
+  bool skipped = false;
   std::size_t examined = 0;
   IVec3 image;
-  while (!queue.empty()) {
-    const Box b = queue.top();
-    queue.pop();
+  auto result = [&](bool limit) {
+    if (best > 1) return CcdResult{false, 1, false};
+    return CcdResult{true, skipped ? std::max(0.0, down(best - resolution)) : best, limit};
+  };
+  while (!stack.empty()) {
+    Box b = stack.back();
+    stack.pop_back();
+    if (b.t0 >= best) continue;
+    if (b.t0 >= best - resolution) {
+      skipped = true;
+      continue;
+    }
+    // Only the part before best - resolution can still matter; bounds hold for any
+    // box, so the rest is cut off instead of refined (along a line of contacts that
+    // would otherwise take a box per point of the line).
+    if (b.t1 > best - resolution) {
+      b.t1 = best - resolution;
+      skipped = true;
+    }
     if (vertex_face && b.u0 + b.v0 > 1) continue;  // outside the triangle u + v <= 1
     int axis = 0;
     if (!f.bounds(b, separation, image, axis)) continue;
     double image_width = 0;
     for (int k = 0; k < 3; ++k) image_width = std::max(image_width, image.c[k].hi - image.c[k].lo);
-    if (image_width <= tolerance) return {true, slot_start(b), false};
-    if (++examined >= options.max_boxes) return {true, slot_start(b), true};
+    if (image_width <= tolerance) {
+      best = b.t0;
+      continue;
+    }
+    if (++examined >= options.max_boxes) {
+      for (const Box& rest : stack) best = std::min(best, rest.t0);
+      best = std::min(best, b.t0);
+      return result(true);
+    }
     Box lo = b, hi = b;
-    lo.depth = hi.depth = b.depth + 1;
     if (axis == 0) {
       const double m = 0.5 * (b.t0 + b.t1);
       lo.t1 = hi.t0 = m;
@@ -182,12 +196,14 @@ CcdResult solve(const Query& q, bool vertex_face, const ReferenceSolverOptions& 
       lo.v1 = hi.v0 = m;
     }
     // A box too small to halve in doubles cannot be refined further: it is a contact.
-    if (lo.width(axis) == 0 || hi.width(axis) == 0) return {true, slot_start(b), false};
-    hi.slot = std::floor(hi.t0 / resolution);
-    queue.push(lo);
-    queue.push(hi);
+    if (lo.width(axis) == 0 || hi.width(axis) == 0) {
+      best = b.t0;
+      continue;
+    }
+    stack.push_back(hi);
+    stack.push_back(lo);
   }
-  return {false, 1, false};
+  return result(false);
 }
 
 }  // namespace

@@ -9,5 +9,6 @@ void add_devices_command(CLI::App& app);
 void add_info_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
 void add_reference_command(CLI::App& app);
+void add_accuracy_command(CLI::App& app);
 
 }  // namespace cstreams::cli

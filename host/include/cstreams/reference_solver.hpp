@@ -14,15 +14,17 @@ namespace cstreams {
 // bounds exclude zero are dropped; the earliest remaining box is split until its
 // bounds are within the tolerance, and its lower t is the time of impact. Running out
 // of boxes to split is answered "collision" at the earliest t still possible.
-// Boxes are taken in order of time slots (time_resolution wide), deepest first within
-// a slot; the reported time is the start of the slot, never later than the contact.
+// Boxes are searched depth first, earlier half first, skipping boxes that start after
+// (or less than time_resolution before) the earliest contact found; the reported time
+// is never later than the first contact, and at most time_resolution (plus the
+// tolerance's share) earlier.
 struct ReferenceSolverOptions {
   // Co-domain tolerance, relative to the largest coordinate of the query: a box whose
   // image fits in a cube of this size around zero is a contact.
   double tolerance = 1e-8;
   // Contacts closer than this distance count as collisions (0: exact touching only).
   double min_separation = 0;
-  // The time of impact is reported rounded down to a multiple of this.
+  // How close to the first contact the reported time must be.
   double time_resolution = 1e-6;
   std::size_t max_boxes = 1000000;
 };

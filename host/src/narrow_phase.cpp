@@ -1,0 +1,118 @@
+#include <cstreams/errors.hpp>
+#include <cstreams/narrow_phase.hpp>
+#include <cstreams/runtime/context.hpp>
+
+namespace cstreams {
+
+const char* to_string(Solver s) noexcept { return s == Solver::cubic ? "cubic" : "conservative"; }
+const char* to_string(Precision p) noexcept { return p == Precision::single ? "single" : "double"; }
+
+Solver parse_solver(const std::string& text)
+{
+  if (text == "cubic") return Solver::cubic;
+  if (text == "conservative") return Solver::conservative;
+  throw InputError("unknown solver '" + text + "' (cubic or conservative)");
+}
+
+Precision parse_precision(const std::string& text)
+{
+  if (text == "single" || text == "float" || text == "f32") return Precision::single;
+  if (text == "double" || text == "f64") return Precision::double_;
+  throw InputError("unknown precision '" + text + "' (single or double)");
+}
+
+namespace {
+
+// Deep enough for the depth-first search to reach boxes as small as the precision
+// allows along the current path; running out still answers conservatively.
+int stack_size(Precision p) { return p == Precision::single ? 96 : 192; }
+
+std::string build_options(const SolverOptions& o)
+{
+  return "-DCS_REAL_DOUBLE=" + std::to_string(o.precision == Precision::double_) +
+         " -DCS_SOLVER=" + std::to_string(o.solver == Solver::conservative) +
+         " -DCS_STACK_SIZE=" + std::to_string(stack_size(o.precision));
+}
+
+template <class Real> void pack(const std::vector<Query>& queries, std::vector<Real>& out)
+{
+  out.resize(queries.size() * 24);
+  std::size_t i = 0;
+  for (const auto& q : queries)
+    for (const auto& p : q)
+      for (int k = 0; k < 3; ++k) out[i++] = static_cast<Real>(p[k]);  // round to nearest
+}
+
+}  // namespace
+
+DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& options)
+    : context_(context), options_(options)
+{
+  if (options.precision == Precision::double_ && !context.device().fp64)
+    throw Error("device " + context.device().name + " has no double precision; use the single-precision solver");
+  if (!(options.tolerance > 0)) throw InputError("solver tolerance must be positive");
+  if (!(options.min_separation >= 0)) throw InputError("minimum separation must not be negative");
+  context.programs().add_sources(ccd_kernel_sources());
+  kernel_ = context.programs().kernel("ccd/narrow_phase.cl", "cs_narrow_phase", build_options(options));
+}
+
+std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::vector<Query>& queries,
+                                                  std::uint64_t* kernel_ns)
+{
+  const std::size_t n = queries.size();
+  std::vector<ElementaryResult> results(n);
+  if (n == 0) {
+    if (kernel_ns) *kernel_ns = 0;
+    return results;
+  }
+  const bool dp = options_.precision == Precision::double_;
+  const std::size_t real_bytes = dp ? 8 : 4;
+  if (queries_.bytes() < n * 24 * real_bytes) queries_ = runtime::Buffer(context_, n * 24 * real_bytes, "queries");
+  if (status_.bytes() < n * 4) status_ = runtime::Buffer(context_, n * 4, "query status");
+  if (toi_.bytes() < n * real_bytes) toi_ = runtime::Buffer(context_, n * real_bytes, "times of impact");
+  if (dp) {
+    std::vector<double> packed;
+    pack(queries, packed);
+    context_.write(queries_, packed.data(), packed.size() * 8);
+  } else {
+    std::vector<float> packed;
+    pack(queries, packed);
+    context_.write(queries_, packed.data(), packed.size() * 4);
+  }
+  const cl_uint exact = dp;  // doubles are the data itself; floats were rounded
+  unsigned index = 0;
+  kernel_.set_arg(index++, queries_);
+  kernel_.set_arg(index++, cl_uint(n));
+  kernel_.set_arg(index++, cl_uint(kind == ContactKind::vertex_face));
+  kernel_.set_arg(index++, exact);
+  if (dp) {
+    kernel_.set_arg(index++, options_.tolerance);
+    kernel_.set_arg(index++, options_.min_separation);
+  } else {
+    // Rounded up, so the float solver is never stricter than asked.
+    kernel_.set_arg(index++, std::nextafter(float(options_.tolerance), 1.0f));
+    kernel_.set_arg(index++, std::nextafter(float(options_.min_separation), 1.0f) * (options_.min_separation > 0));
+  }
+  kernel_.set_arg(index++, cl_uint(options_.max_iterations));
+  kernel_.set_arg(index++, cl_uint(options_.filter));
+  kernel_.set_arg(index++, status_);
+  kernel_.set_arg(index++, toi_);
+  runtime::Timeline timeline;
+  context_.launch(kernel_, n, context_.work_group_size(), kernel_ns ? &timeline : nullptr, "narrow phase");
+
+  std::vector<std::uint32_t> status(n);
+  context_.read(status_, status.data(), n * 4);
+  std::vector<double> toi(n);
+  if (dp) {
+    context_.read(toi_, toi.data(), n * 8);
+  } else {
+    std::vector<float> f(n);
+    context_.read(toi_, f.data(), n * 4);
+    toi.assign(f.begin(), f.end());
+  }
+  for (std::size_t i = 0; i < n; ++i) results[i] = {QueryStatus(status[i]), toi[i]};
+  if (kernel_ns) *kernel_ns = timeline.resolve().front().nanoseconds;
+  return results;
+}
+
+}  // namespace cstreams

@@ -1,0 +1,296 @@
+// The device solvers against exact ground truth, on the device tests select
+// (CSTREAMS_DEVICE; pocl in CI).
+#include "../support/shared_data.hpp"
+#include "../support/test_device.hpp"
+
+#include <cstreams/datasets.hpp>
+#include <cstreams/narrow_phase.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace cstreams;
+
+namespace {
+
+std::vector<Precision> precisions()
+{
+  std::vector<Precision> p{Precision::single};
+  if (cstreams::test::device().device().fp64) p.push_back(Precision::double_);
+  return p;
+}
+
+struct Tally {
+  std::size_t queries = 0, positives = 0, false_negatives = 0, false_positives = 0, filtered = 0, late = 0;
+};
+
+Tally run(DeviceSolver& solver, const Dataset& d)
+{
+  const auto results = solver.solve(d.kind, d.queries);
+  Tally t;
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    ++t.queries;
+    t.positives += d.collides[i];
+    t.filtered += results[i].status == QueryStatus::filtered;
+    if (d.collides[i] && !results[i].collides()) {
+      ++t.false_negatives;
+      UNSCOPED_INFO(d.name << " " << (d.kind == ContactKind::vertex_face ? "vf" : "ee") << " query " << i << " missed");
+    }
+    t.false_positives += !d.collides[i] && results[i].collides();
+    if (d.collides[i] && results[i].collides() && !std::isnan(d.exact_toi[i]) &&
+        (long double)results[i].toi > d.exact_toi[i])
+      ++t.late;
+  }
+  return t;
+}
+
+SolverOptions conservative(Precision p)
+{
+  SolverOptions o;
+  o.precision = p;
+  return o;
+}
+
+// Points of a query: x[0..3] at t = 0, x[4..7] at t = 1.
+Query query(std::initializer_list<Vec3> at0, std::initializer_list<Vec3> at1)
+{
+  Query q;
+  std::size_t i = 0;
+  for (const auto& p : at0) q[i++] = p;
+  for (const auto& p : at1) q[i++] = p;
+  return q;
+}
+
+const Vec3 A(0, 0, 0), B(1, 0, 0), C(0, 1, 0);  // a face in the z = 0 plane
+
+// Degenerate configurations with known answers (true: the features touch in [0, 1]).
+Dataset hard_vertex_face()
+{
+  Dataset d;
+  d.name = "constructed";
+  d.kind = ContactKind::vertex_face;
+  auto add = [&](Query q, bool hit) {
+    d.queries.push_back(q);
+    d.collides.push_back(hit);
+  };
+  const Vec3 in(0.25, 0.25, 0);
+  add(query({in + Vec3(0, 0, 1), A, B, C}, {in - Vec3(0, 0, 1), A, B, C}), true);         // straight through
+  add(query({in, A, B, C}, {in + Vec3(0, 0, 1), A, B, C}), true);                        // touching at t = 0
+  add(query({in + Vec3(0, 0, 1), A, B, C}, {in, A, B, C}), true);                        // touching at t = 1
+  add(query({in, A, B, C}, {in, A, B, C}), true);                                        // no motion, touching
+  add(query({in + Vec3(0, 0, 0.5), A, B, C}, {in + Vec3(0, 0, 0.5), A, B, C}), false);   // no motion, apart
+  add(query({Vec3(-1, 0.25, 0), A, B, C}, {Vec3(2, 0.25, 0), A, B, C}), true);           // slides across, in plane
+  add(query({Vec3(-1, 2, 0), A, B, C}, {Vec3(2, 2, 0), A, B, C}), false);                // slides beside, in plane
+  add(query({Vec3(-1, 0, 0), A, B, C}, {Vec3(2, 0, 0), A, B, C}), true);                 // slides along an edge
+  add(query({Vec3(0.5, 0.5, 0), A, B, C}, {Vec3(0.5, 0.5, 0), A, B, C}), true);          // resting on an edge
+  add(query({in + Vec3(0, 0, 1), A, B, C}, {in + Vec3(0, 0, 1), A + Vec3(0, 0, 2), B + Vec3(0, 0, 2), C + Vec3(0, 0, 2)}), true);
+  // Tangential: the face tilts through the vertex and back only at one instant is not
+  // linear; instead the vertex grazes the face's corner at t = 0.5 (a double root).
+  add(query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5, 0.5, -1), A, B, C}), true);
+  add(query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5 - 1e-3, 0.5 + 1e-3, -1), A, B, C}), false);  // just outside
+  add(query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5 + 2e-3, 0.5 + 2e-3, -1), A, B, C}), true);   // just inside
+  const Vec3 far(3, 3, 0);
+  add(query({far + Vec3(0, 0, 1), A, B, C}, {far - Vec3(0, 0, 1), A, B, C}), false);    // passes the plane outside
+  // Zero-area faces: collinear, and all three corners at one point.
+  add(query({Vec3(0.5, 0, 1), A, B, 2 * B}, {Vec3(0.5, 0, -1), A, B, 2 * B}), true);
+  add(query({Vec3(0.5, 0.2, 1), A, B, 2 * B}, {Vec3(0.5, 0.2, -1), A, B, 2 * B}), false);
+  add(query({Vec3(0, 0, 1), A, A, A}, {Vec3(0, 0, -1), A, A, A}), true);
+  d.exact_toi.assign(d.queries.size(), std::nanl(""));
+  return d;
+}
+
+Dataset hard_edge_edge()
+{
+  Dataset d;
+  d.name = "constructed";
+  d.kind = ContactKind::edge_edge;
+  auto add = [&](Query q, bool hit) {
+    d.queries.push_back(q);
+    d.collides.push_back(hit);
+  };
+  const Vec3 up(0, 0, 1);
+  add(query({A, B, Vec3(0.5, -1, 1), Vec3(0.5, 1, 1)}, {A, B, Vec3(0.5, -1, -1), Vec3(0.5, 1, -1)}), true);  // crossing
+  add(query({A, B, A + up, B + up}, {A, B, A - up, B - up}), true);                              // parallel, overlapping
+  add(query({A, B, A + up + 2 * B, B + up + 2 * B}, {A, B, A - up + 2 * B, B - up + 2 * B}), false);  // parallel, apart
+  add(query({A, B, 0.5 * B, 1.5 * B}, {A, B, 0.5 * B, 1.5 * B}), true);                          // collinear overlap
+  add(query({A, B, 2 * B, 3 * B}, {A, B, 2 * B, 3 * B}), false);                                 // collinear apart
+  add(query({A, B, 2 * B, 3 * B}, {A, B, 0.5 * B, 1.5 * B}), true);                              // collinear sliding in
+  add(query({A, B, B, B + C}, {A, B, B + up, B + C + up}), true);                                // touching at t = 0
+  add(query({A, B, Vec3(0.5, -1, 1), Vec3(0.5, 1, 1)}, {A, B, Vec3(0.5, -1, 0), Vec3(0.5, 1, 0)}), true);   // at t = 1
+  add(query({A, B, Vec3(2, -1, 1), Vec3(2, 1, 1)}, {A, B, Vec3(2, -1, -1), Vec3(2, 1, -1)}), false);  // misses the end
+  add(query({A, B, Vec3(1, -1, 1), Vec3(1, 1, 1)}, {A, B, Vec3(1, -1, -1), Vec3(1, 1, -1)}), true);   // hits the end point
+  add(query({A, B, Vec3(0.5, 0, 1), Vec3(0.5, 0, 1)}, {A, B, Vec3(0.5, 0, -1), Vec3(0.5, 0, -1)}), true);  // zero-length edge
+  add(query({A, A, Vec3(0, -1, 1), Vec3(0, 1, 1)}, {A, A, Vec3(0, -1, -1), Vec3(0, 1, -1)}), true);    // both degenerate-ish
+  add(query({A, B, C, C + up}, {A, B, C, C + up}), false);                                       // no motion, apart
+  d.exact_toi.assign(d.queries.size(), std::nanl(""));
+  return d;
+}
+
+// x + shift computed exactly, checked with the error term of TwoSum.
+bool exact_sum(double x, double shift, double& sum)
+{
+  sum = x + shift;
+  const double bb = sum - x;
+  return (x - (sum - bb)) + (shift - bb) == 0;
+}
+
+// The queries scaled by powers of two (exact) and translated where the sum is exact.
+Dataset transformed(const Dataset& d, double scale, double shift, std::size_t& kept)
+{
+  Dataset out;
+  out.name = d.name;
+  out.kind = d.kind;
+  kept = 0;
+  for (std::size_t i = 0; i < d.queries.size(); ++i) {
+    Query q = d.queries[i];
+    bool exact = true;
+    for (auto& p : q)
+      for (int k = 0; k < 3; ++k) {
+        const double scaled = p[k] * scale;
+        exact &= std::isfinite(scaled) && scaled / scale == p[k];
+        exact &= exact_sum(scaled, shift, p[k]);
+      }
+    if (!exact) continue;
+    ++kept;
+    out.queries.push_back(q);
+    out.collides.push_back(d.collides[i]);
+    out.exact_toi.push_back(d.exact_toi[i]);
+  }
+  return out;
+}
+
+std::vector<Dataset> handmade() { return discover_datasets(cstreams::test::shared_path("scenes-data/sample-queries")); }
+
+}  // namespace
+
+TEST_CASE("constructed degenerate cases: the conservative solver misses none", "[narrow][quick]")
+{
+  for (Precision p : precisions()) {
+    DeviceSolver solver(cstreams::test::device(), conservative(p));
+    for (const Dataset& d : {hard_vertex_face(), hard_edge_edge()}) {
+      INFO(to_string(p) << " " << (d.kind == ContactKind::vertex_face ? "vertex-face" : "edge-edge"));
+      const auto results = solver.solve(d.kind, d.queries);
+      for (std::size_t i = 0; i < d.queries.size(); ++i) {
+        INFO("query " << i);
+        if (d.collides[i]) CHECK(results[i].collides());
+        // Clearly separated cases (all at distances far above the tolerance) stay separate.
+        else CHECK_FALSE(results[i].collides());
+        // The oracle agrees with the construction.
+        const CcdResult oracle = d.kind == ContactKind::vertex_face ? vertex_face_reference(d.queries[i])
+                                                                    : edge_edge_reference(d.queries[i]);
+        CHECK(oracle.collides == bool(d.collides[i]));
+      }
+    }
+  }
+}
+
+TEST_CASE("the time of impact is a lower bound of the first contact", "[narrow][quick]")
+{
+  // The vertex reaches the plane z = 0 at t = 0.3 exactly (0.3 in [0, 1] is not
+  // representable: both solvers must answer at or below it).
+  const Vec3 in(0.25, 0.25, 0);
+  const Query q = query({in + Vec3(0, 0, 0.3), A, B, C}, {in - Vec3(0, 0, 0.7), A, B, C});
+  for (Precision p : precisions()) {
+    auto o = conservative(p);
+    DeviceSolver solver(cstreams::test::device(), o);
+    const auto r = solver.solve(ContactKind::vertex_face, {q});
+    REQUIRE(r[0].collides());
+    CHECK(r[0].toi <= 0.3);
+    CHECK(r[0].toi > 0.29);
+  }
+}
+
+TEST_CASE("a minimum separation makes near misses collide", "[narrow][quick]")
+{
+  const Vec3 in(0.25, 0.25, 0);
+  const Query q = query({in + Vec3(0, 0, 0.01), A, B, C}, {in + Vec3(0.1, 0, 0.01), A, B, C});  // 0.01 above
+  for (Precision p : precisions()) {
+    auto o = conservative(p);
+    DeviceSolver plain(cstreams::test::device(), o);
+    CHECK_FALSE(plain.solve(ContactKind::vertex_face, {q})[0].collides());
+    o.min_separation = 0.02;
+    DeviceSolver separated(cstreams::test::device(), o);
+    CHECK(separated.solve(ContactKind::vertex_face, {q})[0].collides());
+  }
+}
+
+TEST_CASE("the unit-test queries: conservative misses none, cubic is measured", "[narrow][quick]")
+{
+  const auto sets = discover_datasets(cstreams::test::shared_path("scenes-data/sample-queries/unit-tests"));
+  for (Precision p : precisions())
+    for (const auto& d : sets) {
+      DeviceSolver solver(cstreams::test::device(), conservative(p));
+      const Tally t = run(solver, d);
+      CHECK(t.false_negatives == 0);
+      CHECK(t.positives > 0);
+    }
+  SolverOptions cubic;
+  cubic.solver = Solver::cubic;
+  DeviceSolver solver(cstreams::test::device(), cubic);
+  std::size_t found = 0, positives = 0;
+  for (const auto& d : sets) {
+    const Tally t = run(solver, d);
+    found += t.positives - t.false_negatives;
+    positives += t.positives;
+  }
+  // The cubic solver is allowed misses in degenerate cases, but not to be blind.
+  CHECK(found > positives / 2);
+}
+
+TEST_CASE("all 7,279 hand-made queries: the conservative solver misses none", "[narrow][slow]")
+{
+  const auto sets = handmade();
+  for (Precision p : precisions()) {
+    DeviceSolver solver(cstreams::test::device(), conservative(p));
+    Tally total;
+    for (const auto& d : sets) {
+      const Tally t = run(solver, d);
+      total.queries += t.queries;
+      total.false_negatives += t.false_negatives;
+      total.filtered += t.filtered;
+    }
+    INFO(to_string(p));
+    CHECK(total.queries == 7279);
+    CHECK(total.false_negatives == 0);
+    CHECK(total.filtered > 0);  // the filter does cull, and (above) never a true contact
+  }
+}
+
+TEST_CASE("scaled and translated hand-made queries: the conservative solver misses none", "[narrow][slow]")
+{
+  const auto sets = handmade();
+  for (Precision p : precisions()) {
+    DeviceSolver solver(cstreams::test::device(), conservative(p));
+    for (double scale : {0x1p-13, 0x1p13})  // 1.2e-4 and 8.2e3, exact
+      for (double shift : {0.0, 1e4}) {
+        std::size_t kept_total = 0, missed = 0;
+        for (const auto& d : sets) {
+          std::size_t kept = 0;
+          const Dataset moved = transformed(d, scale, shift, kept);
+          kept_total += kept;
+          missed += run(solver, moved).false_negatives;
+        }
+        INFO(to_string(p) << " scale " << scale << " shift " << shift << ": " << kept_total << " exact queries");
+        CHECK(kept_total > 0);
+        CHECK(missed == 0);
+      }
+  }
+}
+
+TEST_CASE("real simulation steps: the conservative solver misses none and is never late", "[narrow][slow]")
+{
+  for (const auto& s : cstreams::test::real_steps) {
+    const std::string folder = cstreams::test::shared_path(std::string("scenes-data/scalable-ccd-sample/") + s.scene);
+    for (Precision p : precisions()) {
+      DeviceSolver solver(cstreams::test::device(), conservative(p));
+      for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) {
+        const Dataset d = real_step_dataset(folder, kind);
+        const Tally t = run(solver, d);
+        INFO(d.name << " " << to_string(p));
+        CHECK(t.false_negatives == 0);
+        CHECK(t.late == 0);
+      }
+    }
+  }
+}
