@@ -1,9 +1,8 @@
 #include <cstreams/contacts.hpp>
-#include <cstreams/errors.hpp>
+#include <cstreams/file_output.hpp>
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <ostream>
 #include <tuple>
 
@@ -29,21 +28,7 @@ void write_contacts_csv(std::ostream& out, const std::vector<Contact>& contacts)
 
 void write_contacts_csv(const std::string& path, const std::vector<Contact>& contacts)
 {
-  const std::string temporary = path + ".partial";
-  {
-    std::ofstream out(temporary, std::ios::trunc);
-    if (!out) throw InputError(path + ": cannot create file");
-    write_contacts_csv(out, contacts);
-    if (!out.flush()) {
-      out.close();
-      std::remove(temporary.c_str());
-      throw InputError(path + ": write failed");
-    }
-  }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    std::remove(temporary.c_str());
-    throw InputError(path + ": cannot move the written file into place");
-  }
+  write_file_atomically(path, [&](std::ostream& out) { write_contacts_csv(out, contacts); });
 }
 
 }  // namespace cstreams

@@ -1,3 +1,4 @@
+#include <cstreams/file_output.hpp>
 #include <cstreams/mesh_io.hpp>
 
 #include <algorithm>
@@ -411,40 +412,31 @@ Mesh read_mesh(const std::string& path)
 
 void write_ply(const std::string& path, const Mesh& mesh, PlyEncoding encoding)
 {
-  const std::string temporary = path + ".partial";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path + ": cannot create file");
-    const bool binary = encoding == PlyEncoding::binary_little_endian;
-    out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
-        << "element vertex " << mesh.positions.size() << "\n"
-        << "property double x\nproperty double y\nproperty double z\n"
-        << "element face " << mesh.faces.size() << "\n"
-        << "property list uchar int vertex_indices\nend_header\n";
-    if (binary && host_is_big_endian()) throw Error("write_ply writes little-endian PLY from little-endian hosts only");
-    if (binary) {
-      for (const auto& p : mesh.positions) out.write(reinterpret_cast<const char*>(p.data()), 24);
-      for (const auto& f : mesh.faces) {
-        const unsigned char three = 3;
-        const std::int32_t idx[3] = {std::int32_t(f[0]), std::int32_t(f[1]), std::int32_t(f[2])};
-        out.write(reinterpret_cast<const char*>(&three), 1);
-        out.write(reinterpret_cast<const char*>(idx), 12);
-      }
-    } else {
-      out.precision(17);
-      for (const auto& p : mesh.positions) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
-      for (const auto& f : mesh.faces) out << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
-    }
-    if (!out.flush()) {
-      out.close();
-      std::remove(temporary.c_str());
-      throw InputError(path + ": write failed");
-    }
-  }
-  if (std::rename(temporary.c_str(), path.c_str()) != 0) {
-    std::remove(temporary.c_str());
-    throw InputError(path + ": cannot move the written file into place");
-  }
+  const bool binary = encoding == PlyEncoding::binary_little_endian;
+  if (binary && host_is_big_endian()) throw Error("write_ply writes little-endian PLY from little-endian hosts only");
+  write_file_atomically(
+      path,
+      [&](std::ostream& out) {
+        out << "ply\nformat " << (binary ? "binary_little_endian" : "ascii") << " 1.0\n"
+            << "element vertex " << mesh.positions.size() << "\n"
+            << "property double x\nproperty double y\nproperty double z\n"
+            << "element face " << mesh.faces.size() << "\n"
+            << "property list uchar int vertex_indices\nend_header\n";
+        if (binary) {
+          for (const auto& p : mesh.positions) out.write(reinterpret_cast<const char*>(p.data()), 24);
+          for (const auto& f : mesh.faces) {
+            const unsigned char three = 3;
+            const std::int32_t idx[3] = {std::int32_t(f[0]), std::int32_t(f[1]), std::int32_t(f[2])};
+            out.write(reinterpret_cast<const char*>(&three), 1);
+            out.write(reinterpret_cast<const char*>(idx), 12);
+          }
+        } else {
+          out.precision(17);
+          for (const auto& p : mesh.positions) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+          for (const auto& f : mesh.faces) out << "3 " << f[0] << ' ' << f[1] << ' ' << f[2] << '\n';
+        }
+      },
+      binary);
 }
 
 }  // namespace cstreams

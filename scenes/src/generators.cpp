@@ -1,4 +1,5 @@
 #include <cstreams/errors.hpp>
+#include <cstreams/file_output.hpp>
 #include <cstreams/mesh_io.hpp>
 #include <cstreams/scenes/generators.hpp>
 #include <cstreams/scenes/shapes.hpp>
@@ -33,13 +34,7 @@ nlohmann::json frames_entry(const std::string& stem, int frames)
 std::string write_manifest(const std::string& folder, const nlohmann::json& manifest)
 {
   const std::string path = folder + "/scene.json";
-  const std::string temporary = path + ".partial";
-  {
-    std::ofstream out(temporary);
-    out << manifest.dump(2) << "\n";
-    if (!out.flush()) throw InputError(path + ": write failed");
-  }
-  std::filesystem::rename(temporary, path);
+  write_file_atomically(path, [&](std::ostream& out) { out << manifest.dump(2) << "\n"; });
   return path;
 }
 

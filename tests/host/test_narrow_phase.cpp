@@ -64,66 +64,67 @@ Query query(std::initializer_list<Vec3> at0, std::initializer_list<Vec3> at1)
 
 const Vec3 A(0, 0, 0), B(1, 0, 0), C(0, 1, 0);  // a face in the z = 0 plane
 
-// Degenerate configurations with known answers (true: the features touch in [0, 1]).
-Dataset hard_vertex_face()
+Dataset constructed(ContactKind kind)
 {
   Dataset d;
   d.name = "constructed";
-  d.kind = ContactKind::vertex_face;
-  auto add = [&](Query q, bool hit) {
-    d.queries.push_back(q);
-    d.collides.push_back(hit);
-  };
+  d.kind = kind;
+  return d;
+}
+
+void add(Dataset& d, const Query& q, bool collides)
+{
+  d.queries.push_back(q);
+  d.collides.push_back(collides);
+  d.exact_toi.push_back(std::nanl(""));
+}
+
+// Degenerate configurations with known answers (true: the features touch in [0, 1]).
+Dataset hard_vertex_face()
+{
+  Dataset d = constructed(ContactKind::vertex_face);
   const Vec3 in(0.25, 0.25, 0);
-  add(query({in + Vec3(0, 0, 1), A, B, C}, {in - Vec3(0, 0, 1), A, B, C}), true);         // straight through
-  add(query({in, A, B, C}, {in + Vec3(0, 0, 1), A, B, C}), true);                        // touching at t = 0
-  add(query({in + Vec3(0, 0, 1), A, B, C}, {in, A, B, C}), true);                        // touching at t = 1
-  add(query({in, A, B, C}, {in, A, B, C}), true);                                        // no motion, touching
-  add(query({in + Vec3(0, 0, 0.5), A, B, C}, {in + Vec3(0, 0, 0.5), A, B, C}), false);   // no motion, apart
-  add(query({Vec3(-1, 0.25, 0), A, B, C}, {Vec3(2, 0.25, 0), A, B, C}), true);           // slides across, in plane
-  add(query({Vec3(-1, 2, 0), A, B, C}, {Vec3(2, 2, 0), A, B, C}), false);                // slides beside, in plane
-  add(query({Vec3(-1, 0, 0), A, B, C}, {Vec3(2, 0, 0), A, B, C}), true);                 // slides along an edge
-  add(query({Vec3(0.5, 0.5, 0), A, B, C}, {Vec3(0.5, 0.5, 0), A, B, C}), true);          // resting on an edge
-  add(query({in + Vec3(0, 0, 1), A, B, C}, {in + Vec3(0, 0, 1), A + Vec3(0, 0, 2), B + Vec3(0, 0, 2), C + Vec3(0, 0, 2)}), true);
+  add(d, query({in + Vec3(0, 0, 1), A, B, C}, {in - Vec3(0, 0, 1), A, B, C}), true);         // straight through
+  add(d, query({in, A, B, C}, {in + Vec3(0, 0, 1), A, B, C}), true);                        // touching at t = 0
+  add(d, query({in + Vec3(0, 0, 1), A, B, C}, {in, A, B, C}), true);                        // touching at t = 1
+  add(d, query({in, A, B, C}, {in, A, B, C}), true);                                        // no motion, touching
+  add(d, query({in + Vec3(0, 0, 0.5), A, B, C}, {in + Vec3(0, 0, 0.5), A, B, C}), false);   // no motion, apart
+  add(d, query({Vec3(-1, 0.25, 0), A, B, C}, {Vec3(2, 0.25, 0), A, B, C}), true);           // slides across, in plane
+  add(d, query({Vec3(-1, 2, 0), A, B, C}, {Vec3(2, 2, 0), A, B, C}), false);                // slides beside, in plane
+  add(d, query({Vec3(-1, 0, 0), A, B, C}, {Vec3(2, 0, 0), A, B, C}), true);                 // slides along an edge
+  add(d, query({Vec3(0.5, 0.5, 0), A, B, C}, {Vec3(0.5, 0.5, 0), A, B, C}), true);          // resting on an edge
+  add(d, query({in + Vec3(0, 0, 1), A, B, C}, {in + Vec3(0, 0, 1), A + Vec3(0, 0, 2), B + Vec3(0, 0, 2), C + Vec3(0, 0, 2)}), true);
   // Tangential: the face tilts through the vertex and back only at one instant is not
   // linear; instead the vertex grazes the face's corner at t = 0.5 (a double root).
-  add(query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5, 0.5, -1), A, B, C}), true);
-  add(query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5 - 1e-3, 0.5 + 1e-3, -1), A, B, C}), false);  // just outside
-  add(query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5 + 2e-3, 0.5 + 2e-3, -1), A, B, C}), true);   // just inside
+  add(d, query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5, 0.5, -1), A, B, C}), true);
+  add(d, query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5 - 1e-3, 0.5 + 1e-3, -1), A, B, C}), false);  // just outside
+  add(d, query({Vec3(-0.5, -0.5, 1), A, B, C}, {Vec3(0.5 + 2e-3, 0.5 + 2e-3, -1), A, B, C}), true);   // just inside
   const Vec3 far(3, 3, 0);
-  add(query({far + Vec3(0, 0, 1), A, B, C}, {far - Vec3(0, 0, 1), A, B, C}), false);    // passes the plane outside
+  add(d, query({far + Vec3(0, 0, 1), A, B, C}, {far - Vec3(0, 0, 1), A, B, C}), false);    // passes the plane outside
   // Zero-area faces: collinear, and all three corners at one point.
-  add(query({Vec3(0.5, 0, 1), A, B, 2 * B}, {Vec3(0.5, 0, -1), A, B, 2 * B}), true);
-  add(query({Vec3(0.5, 0.2, 1), A, B, 2 * B}, {Vec3(0.5, 0.2, -1), A, B, 2 * B}), false);
-  add(query({Vec3(0, 0, 1), A, A, A}, {Vec3(0, 0, -1), A, A, A}), true);
-  d.exact_toi.assign(d.queries.size(), std::nanl(""));
+  add(d, query({Vec3(0.5, 0, 1), A, B, 2 * B}, {Vec3(0.5, 0, -1), A, B, 2 * B}), true);
+  add(d, query({Vec3(0.5, 0.2, 1), A, B, 2 * B}, {Vec3(0.5, 0.2, -1), A, B, 2 * B}), false);
+  add(d, query({Vec3(0, 0, 1), A, A, A}, {Vec3(0, 0, -1), A, A, A}), true);
   return d;
 }
 
 Dataset hard_edge_edge()
 {
-  Dataset d;
-  d.name = "constructed";
-  d.kind = ContactKind::edge_edge;
-  auto add = [&](Query q, bool hit) {
-    d.queries.push_back(q);
-    d.collides.push_back(hit);
-  };
+  Dataset d = constructed(ContactKind::edge_edge);
   const Vec3 up(0, 0, 1);
-  add(query({A, B, Vec3(0.5, -1, 1), Vec3(0.5, 1, 1)}, {A, B, Vec3(0.5, -1, -1), Vec3(0.5, 1, -1)}), true);  // crossing
-  add(query({A, B, A + up, B + up}, {A, B, A - up, B - up}), true);                              // parallel, overlapping
-  add(query({A, B, A + up + 2 * B, B + up + 2 * B}, {A, B, A - up + 2 * B, B - up + 2 * B}), false);  // parallel, apart
-  add(query({A, B, 0.5 * B, 1.5 * B}, {A, B, 0.5 * B, 1.5 * B}), true);                          // collinear overlap
-  add(query({A, B, 2 * B, 3 * B}, {A, B, 2 * B, 3 * B}), false);                                 // collinear apart
-  add(query({A, B, 2 * B, 3 * B}, {A, B, 0.5 * B, 1.5 * B}), true);                              // collinear sliding in
-  add(query({A, B, B, B + C}, {A, B, B + up, B + C + up}), true);                                // touching at t = 0
-  add(query({A, B, Vec3(0.5, -1, 1), Vec3(0.5, 1, 1)}, {A, B, Vec3(0.5, -1, 0), Vec3(0.5, 1, 0)}), true);   // at t = 1
-  add(query({A, B, Vec3(2, -1, 1), Vec3(2, 1, 1)}, {A, B, Vec3(2, -1, -1), Vec3(2, 1, -1)}), false);  // misses the end
-  add(query({A, B, Vec3(1, -1, 1), Vec3(1, 1, 1)}, {A, B, Vec3(1, -1, -1), Vec3(1, 1, -1)}), true);   // hits the end point
-  add(query({A, B, Vec3(0.5, 0, 1), Vec3(0.5, 0, 1)}, {A, B, Vec3(0.5, 0, -1), Vec3(0.5, 0, -1)}), true);  // zero-length edge
-  add(query({A, A, Vec3(0, -1, 1), Vec3(0, 1, 1)}, {A, A, Vec3(0, -1, -1), Vec3(0, 1, -1)}), true);    // both degenerate-ish
-  add(query({A, B, C, C + up}, {A, B, C, C + up}), false);                                       // no motion, apart
-  d.exact_toi.assign(d.queries.size(), std::nanl(""));
+  add(d, query({A, B, Vec3(0.5, -1, 1), Vec3(0.5, 1, 1)}, {A, B, Vec3(0.5, -1, -1), Vec3(0.5, 1, -1)}), true);  // crossing
+  add(d, query({A, B, A + up, B + up}, {A, B, A - up, B - up}), true);                              // parallel, overlapping
+  add(d, query({A, B, A + up + 2 * B, B + up + 2 * B}, {A, B, A - up + 2 * B, B - up + 2 * B}), false);  // parallel, apart
+  add(d, query({A, B, 0.5 * B, 1.5 * B}, {A, B, 0.5 * B, 1.5 * B}), true);                          // collinear overlap
+  add(d, query({A, B, 2 * B, 3 * B}, {A, B, 2 * B, 3 * B}), false);                                 // collinear apart
+  add(d, query({A, B, 2 * B, 3 * B}, {A, B, 0.5 * B, 1.5 * B}), true);                              // collinear sliding in
+  add(d, query({A, B, B, B + C}, {A, B, B + up, B + C + up}), true);                                // touching at t = 0
+  add(d, query({A, B, Vec3(0.5, -1, 1), Vec3(0.5, 1, 1)}, {A, B, Vec3(0.5, -1, 0), Vec3(0.5, 1, 0)}), true);   // at t = 1
+  add(d, query({A, B, Vec3(2, -1, 1), Vec3(2, 1, 1)}, {A, B, Vec3(2, -1, -1), Vec3(2, 1, -1)}), false);  // misses the end
+  add(d, query({A, B, Vec3(1, -1, 1), Vec3(1, 1, 1)}, {A, B, Vec3(1, -1, -1), Vec3(1, 1, -1)}), true);   // hits the end point
+  add(d, query({A, B, Vec3(0.5, 0, 1), Vec3(0.5, 0, 1)}, {A, B, Vec3(0.5, 0, -1), Vec3(0.5, 0, -1)}), true);  // zero-length edge
+  add(d, query({A, A, Vec3(0, -1, 1), Vec3(0, 1, 1)}, {A, A, Vec3(0, -1, -1), Vec3(0, 1, -1)}), true);    // both degenerate-ish
+  add(d, query({A, B, C, C + up}, {A, B, C, C + up}), false);                                       // no motion, apart
   return d;
 }
 

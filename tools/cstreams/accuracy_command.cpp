@@ -3,6 +3,7 @@
 #include <cstreams/datasets.hpp>
 #include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
+#include <cstreams/file_output.hpp>
 #include <cstreams/narrow_phase.hpp>
 #include <cstreams/runtime/context.hpp>
 
@@ -119,11 +120,7 @@ void print_row(const Row& r)
 
 void write_file(const std::string& path, const std::string& text)
 {
-  std::ofstream out(path + ".partial");
-  out << text;
-  if (!out.flush()) throw InputError(path + ": write failed");
-  out.close();
-  if (std::rename((path + ".partial").c_str(), path.c_str()) != 0) throw InputError(path + ": cannot write");
+  write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 
 void run(const AccuracyOptions& o)
