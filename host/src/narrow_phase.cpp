@@ -2,6 +2,9 @@
 #include <cstreams/narrow_phase.hpp>
 #include <cstreams/runtime/context.hpp>
 
+#include <cmath>
+#include <limits>
+
 namespace cstreams {
 
 const char* to_string(Solver s) noexcept { return s == Solver::cubic ? "cubic" : "conservative"; }
@@ -66,6 +69,12 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
     return results;
   }
   const bool dp = options_.precision == Precision::double_;
+  for (std::size_t i = 0; i < n; ++i)
+    for (const auto& p : queries[i]) {
+      if (!p.allFinite()) throw InputError("query " + std::to_string(i) + " has a NaN or infinite coordinate");
+      if (!dp && p.cwiseAbs().maxCoeff() > double(std::numeric_limits<float>::max()))
+        throw InputError("query " + std::to_string(i) + " has a coordinate too large for the single-precision solver");
+    }
   const std::size_t real_bytes = dp ? 8 : 4;
   if (queries_.bytes() < n * 24 * real_bytes) queries_ = runtime::Buffer(context_, n * 24 * real_bytes, "queries");
   if (status_.bytes() < n * 4) status_ = runtime::Buffer(context_, n * 4, "query status");

@@ -4,11 +4,13 @@
 #include "../support/test_device.hpp"
 
 #include <cstreams/datasets.hpp>
+#include <cstreams/errors.hpp>
 #include <cstreams/narrow_phase.hpp>
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 
 using namespace cstreams;
 
@@ -200,6 +202,19 @@ TEST_CASE("the time of impact is a lower bound of the first contact", "[narrow][
     CHECK(r[0].toi <= 0.3);
     CHECK(r[0].toi > 0.29);
   }
+}
+
+TEST_CASE("queries with NaN, infinite or (in single precision) too large coordinates are rejected", "[narrow][quick]")
+{
+  const Vec3 in(0.25, 0.25, 0);
+  Query q = query({in + Vec3(0, 0, 1), A, B, C}, {in - Vec3(0, 0, 1), A, B, C});
+  DeviceSolver solver(cstreams::test::device(), conservative(Precision::single));
+  q[5].y() = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_WITH(solver.solve(ContactKind::vertex_face, {q, q}), Catch::Contains("query 0 has a NaN"));
+  q[5].y() = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_AS(solver.solve(ContactKind::vertex_face, {q}), InputError);
+  q[5].y() = 1e300;
+  CHECK_THROWS_WITH(solver.solve(ContactKind::vertex_face, {q}), Catch::Contains("too large for the single-precision"));
 }
 
 TEST_CASE("a minimum separation makes near misses collide", "[narrow][quick]")
