@@ -114,9 +114,15 @@ inline int cs_box_bounds(const cs_contact_function* f, const cs_box b, const rea
     n[2] = ea[0] * eb[1] - ea[1] * eb[0];
   }
   for (int which = 0; which < 2; ++which) {
-    const real d0 = which ? n[0] : centre[0], d1 = which ? n[1] : centre[1], d2 = which ? n[2] : centre[2];
+    real d0 = which ? n[0] : centre[0], d1 = which ? n[1] : centre[1], d2 = which ? n[2] : centre[2];
+    /* Scaled to a largest component of 1: any direction is as valid, and products with
+     * tiny directions would otherwise fall into subnormals (slow on CPUs). */
+    const real largest = fmax(fabs(d0), fmax(fabs(d1), fabs(d2)));
+    if (!(largest > CS_TINY * (real)0x1p24) || !isfinite(largest)) continue;
+    d0 /= largest;
+    d1 /= largest;
+    d2 /= largest;
     const real norm1 = fabs(d0) + fabs(d1) + fabs(d2);
-    if (!(norm1 > 0) || !isfinite(norm1)) continue;
     real lo = CS_REAL_MAX, hi = -CS_REAL_MAX;
     for (int c = 0; c < 8; ++c) {
       const cs_interval dot =
