@@ -80,9 +80,9 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
         throw InputError("query " + std::to_string(i) + " has a coordinate too large for the single-precision solver");
     }
   const std::size_t real_bytes = dp ? 8 : 4;
-  if (queries_.bytes() < n * 24 * real_bytes) queries_ = runtime::Buffer(context_, n * 24 * real_bytes, "queries");
-  if (status_.bytes() < n * 4) status_ = runtime::Buffer(context_, n * 4, "query status");
-  if (toi_.bytes() < n * real_bytes) toi_ = runtime::Buffer(context_, n * real_bytes, "times of impact");
+  runtime::ensure_capacity(context_, queries_, n * 24 * real_bytes, "queries");
+  runtime::ensure_capacity(context_, status_, n * 4, "query status");
+  runtime::ensure_capacity(context_, toi_, n * real_bytes, "times of impact");
   if (dp) {
     std::vector<double> packed;
     pack(queries, packed);

@@ -93,6 +93,11 @@ Buffer::Buffer(Context& context, std::size_t bytes, const char* label) : bytes_(
   check(status, "clCreateBuffer", std::string("allocating ") + std::to_string(bytes) + " bytes for " + label);
 }
 
+void ensure_capacity(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
+{
+  if (buffer.bytes() < bytes) buffer = Buffer(context, bytes, label);
+}
+
 void Kernel::set_raw(unsigned index, std::size_t size, const void* value) const
 {
   check(clSetKernelArg(kernel_.get(), index, size, value), "clSetKernelArg",

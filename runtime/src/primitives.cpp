@@ -13,11 +13,6 @@ std::string scan_options(const DeviceInfo& device)
 {
   return "-DCS_SCAN_ITEMS=" + std::to_string(scan_items_for(device));
 }
-
-void ensure(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
-{
-  if (buffer.bytes() < bytes) buffer = Buffer(context, bytes, label);
-}
 }  // namespace
 
 Scan::Scan(Context& context)
@@ -59,7 +54,7 @@ void Scan::level(const Buffer& in, const Buffer& out, std::size_t n, const Buffe
     return;
   }
   if (levels_.size() <= depth) levels_.resize(depth + 1);
-  ensure(context_, levels_[depth], tiles * sizeof(cl_uint), "scan tile sums");
+  ensure_capacity(context_, levels_[depth], tiles * sizeof(cl_uint), "scan tile sums");
   const Buffer sums = levels_[depth];
   reduce_.set_args(in, count, sums);
   context_.launch(reduce_, tiles * wg, wg, timeline, label);
@@ -77,7 +72,7 @@ void Compactor::compact(const Buffer& src, std::size_t words, const Buffer& keep
                         std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline,
                         const char* label)
 {
-  ensure(context_, offsets_, n * sizeof(cl_uint), "compaction offsets");
+  ensure_capacity(context_, offsets_, n * sizeof(cl_uint), "compaction offsets");
   scan_.exclusive(keep, offsets_, n, counters, slot, timeline, label);
   scatter_.set_args(src, cl_uint(words), keep, offsets_, cl_uint(n), dst, cl_uint(capacity));
   context_.launch(scatter_, n, context_.work_group_size(), timeline, label);

@@ -42,11 +42,6 @@ struct PassState {
 // Slack on growth, so that a count that creeps up frame by frame does not rerun each time.
 std::size_t grown(std::size_t needed) { return needed + needed / 8 + 16; }
 
-void ensure(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
-{
-  if (buffer.bytes() < bytes) buffer = Buffer(context, bytes, label);
-}
-
 std::string registration_define(Registration r)
 {
   return "-DCS_REGISTRATION=" + std::to_string(int(r));
@@ -137,8 +132,8 @@ struct Scheduler::State {
                   to_string(options.registration) + " segments for stream " + spec(e.stream).name +
                   " (up to " + std::to_string(e.segment_capacity) + " items per segment), more than one allocation of " +
                   context.device().name + " may hold; the segmented-lock registration needs far less");
-    ensure(context, e.items, bytes, "registration segments");
-    ensure(context, e.counts, e.segments * sizeof(cl_uint), "registration counts");
+    ensure_capacity(context, e.items, bytes, "registration segments");
+    ensure_capacity(context, e.counts, e.segments * sizeof(cl_uint), "registration counts");
   }
 
   void execute(PassState& p, Redo redo)
@@ -151,7 +146,7 @@ struct Scheduler::State {
     if (redo == Redo::full) {
       if (segmented)
         for (auto& e : p.emitters) prepare_segments(p, e, global);
-      if (p.spec->culls()) ensure(context, p.keep, n * sizeof(cl_uint), "cull flags");
+      if (p.spec->culls()) ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags");
       bind_args(p);
       context.launch(p.kernel, global, wg, tl(), label);
       ++p.stats.launches;
@@ -159,7 +154,7 @@ struct Scheduler::State {
     if (segmented) {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
-        ensure(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
+        ensure_capacity(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
         scan.exclusive(e.counts, offsets, e.segments, counters, dst.slot, tl(), label.c_str());
         merge.set_args(e.items, cl_uint(words(e.stream)), e.counts, offsets, cl_uint(e.segments),
                        cl_uint(e.segment_capacity), cl_uint(options.registration == Registration::lock_free),

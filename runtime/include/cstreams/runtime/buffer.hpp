@@ -22,4 +22,8 @@ private:
   std::size_t bytes_ = 0;
 };
 
+// Reallocates `buffer` when it holds fewer than `bytes` (contents are then lost);
+// scratch and output buffers only ever grow, so steady-state runs allocate nothing.
+void ensure_capacity(Context& context, Buffer& buffer, std::size_t bytes, const char* label);
+
 }  // namespace cstreams::runtime
