@@ -65,6 +65,7 @@ std::vector<StreamId> pass_outputs(const PassSpec& p)
   std::vector<StreamId> out = p.writes;
   out.insert(out.end(), p.emits.begin(), p.emits.end());
   if (p.culls()) out.push_back(p.cull_target);
+  out.insert(out.end(), p.updates.begin(), p.updates.end());
   return out;
 }
 
@@ -77,12 +78,17 @@ std::vector<StreamId> pass_inputs(const PassSpec& p)
   for (const auto& a : p.args)
     if (auto b = std::get_if<BufferArg>(&a))
       if (std::find(outputs.begin(), outputs.end(), b->stream) == outputs.end()) in.push_back(b->stream);
+  // A stream updated in place is the pass's output, ordered as such, not an input.
+  in.erase(std::remove_if(in.begin(), in.end(),
+                          [&](StreamId s) { return std::find(p.updates.begin(), p.updates.end(), s) != p.updates.end(); }),
+           in.end());
   return in;
 }
 
 std::vector<std::size_t> StreamGraph::schedule() const
 {
   std::vector<long> writer(streams_.size(), -1);
+  std::vector<std::vector<std::size_t>> updaters(streams_.size());  // declaration order
   for (std::size_t p = 0; p < passes_.size(); ++p) {
     const auto& pass = passes_[p];
     if (pass.over.index >= streams_.size()) throw Error("pass " + pass.name + " has no stream to launch over");
@@ -91,7 +97,15 @@ std::vector<std::size_t> StreamGraph::schedule() const
     if (pass.culls() && pass.cull_source != pass.over)
       throw Error("pass " + pass.name + " culls " + stream(pass.cull_source).name + " but is launched over " +
                   stream(pass.over).name);
+    for (StreamId s : pass.updates) {
+      if (stream(s).variable) throw Error("pass " + pass.name + " updates variable-length stream " + stream(s).name);
+      if (!pass.emits.empty() || pass.culls())
+        throw Error("pass " + pass.name + " updates " + stream(s).name +
+                    " in place but also emits or culls, and so may be rerun");
+      updaters[s.index].push_back(p);
+    }
     for (StreamId s : pass_outputs(pass)) {
+      if (std::find(pass.updates.begin(), pass.updates.end(), s) != pass.updates.end()) continue;
       const auto& spec = stream(s);
       if (writer[s.index] >= 0)
         throw Error("stream " + spec.name + " is written by both " + passes_[writer[s.index]].name + " and " + pass.name);
@@ -113,6 +127,12 @@ std::vector<std::size_t> StreamGraph::schedule() const
       if (std::find(outputs.begin(), outputs.end(), s) != outputs.end())
         throw Error("pass " + passes_[p].name + " both reads and writes stream " + stream(s).name);
       if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
+      for (std::size_t u : updaters[s.index]) deps[p].push_back(u);  // readers see every update
+    }
+    for (StreamId s : passes_[p].updates) {
+      if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
+      for (std::size_t u : updaters[s.index])
+        if (u < p) deps[p].push_back(u);  // updates apply in declaration order
     }
   }
 

@@ -67,3 +67,16 @@ __kernel void test_flag_odd(__global const uint* values, const uint n, __global 
   const uint i = get_global_id(0);
   if (i < n) keep[i] = values[i] & 1u;
 }
+
+/* In-place updates, for the scheduler's update() passes. */
+__kernel void test_plus_one(__global uint* values, const uint n)
+{
+  const uint i = get_global_id(0);
+  if (i < n) values[i] += 1u;
+}
+
+__kernel void test_times_two(__global uint* values, const uint n)
+{
+  const uint i = get_global_id(0);
+  if (i < n) values[i] *= 2u;
+}

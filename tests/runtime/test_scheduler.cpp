@@ -155,6 +155,38 @@ TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][sche
   CHECK(s.stats().scratch_bytes > 0);
 }
 
+TEST_CASE("passes update a fixed stream in place, in declaration order, before its readers", "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  const std::size_t n = 10007;
+  auto values = g.fixed("values", 4, n);
+  auto squares = g.fixed("squares", 4, n);
+  auto pairs = g.variable("pairs", 8, 16);
+  // Declared reader first and updates out of dependency order: the scheduler must run
+  // square, plus_one, times_two, expand.
+  g.pass("expand", {program, "test_expand"}).launch_over(squares).emit(pairs).arg(buffer_of(squares)).arg(count_of(squares));
+  g.pass("square", {program, "test_square"})
+      .launch_over(values)
+      .write(squares)
+      .arg(buffer_of(values))
+      .arg(count_of(values))
+      .arg(buffer_of(squares));
+  g.pass("plus_one", {program, "test_plus_one"}).launch_over(squares).update(squares).arg(buffer_of(squares)).arg(count_of(squares));
+  g.pass("times_two", {program, "test_times_two"}).launch_over(squares).update(squares).arg(buffer_of(squares)).arg(count_of(squares));
+  for (auto registration : {Registration::lock_free, Registration::segmented_lock}) {
+    Scheduler s(ctx, g, {registration, true});
+    CHECK(s.execution_order() == std::vector<std::string>{"square", "plus_one", "times_two", "expand"});
+    const auto v = random_values(n, 17);
+    s.upload(values, v);
+    s.run();
+    std::vector<std::uint32_t> expected(n);
+    for (std::size_t i = 0; i < n; ++i) expected[i] = (v[i] * v[i] + 1u) * 2u;
+    CHECK(s.download<std::uint32_t>(squares) == expected);
+    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(expected).pairs));
+  }
+}
+
 TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
 {
   StreamGraph g;
@@ -184,5 +216,16 @@ TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][sche
   CHECK_THROWS_WITH(fixed_emit.schedule(), Catch::Contains("emits into fixed-length stream v"));
 
   CHECK_THROWS_WITH(StreamGraph().fixed("odd", 6, 1), Catch::Contains("multiple of 4"));
+
+  StreamGraph update_variable;
+  auto w = update_variable.variable("w", 4, 1);
+  update_variable.pass("p", {program, "k"}).launch_over(w).update(w);
+  CHECK_THROWS_WITH(update_variable.schedule(), Catch::Contains("updates variable-length stream w"));
+
+  StreamGraph update_and_emit;
+  auto fx = update_and_emit.fixed("fx", 4, 1);
+  auto out = update_and_emit.variable("out", 4, 1);
+  update_and_emit.pass("p", {program, "k"}).launch_over(fx).update(fx).emit(out);
+  CHECK_THROWS_WITH(update_and_emit.schedule(), Catch::Contains("may be rerun"));
   (void)f;
 }

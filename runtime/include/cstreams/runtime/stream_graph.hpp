@@ -61,7 +61,10 @@ template <class T> PassArg value_of(const T& v)
 // Kernel signature: the pass's own arguments, then per emitted stream (in emit order)
 // CS_EMITTER_PARAMS(T, name), then for a culling pass `__global uint* keep` (one flag
 // per item of the culled stream). A pass must not write what it reads: reruns after
-// an overflow rely on passes being functions of their inputs.
+// an overflow rely on passes being functions of their inputs. The one exception is
+// update(): a pass that neither emits nor culls (so it never reruns) may modify a
+// fixed stream in place; several such passes apply in declaration order, after the
+// stream's writer and before every pass that reads it (a BVH refit, level by level).
 struct PassSpec {
   std::string name;
   KernelRef kernel{"", ""};
@@ -69,6 +72,7 @@ struct PassSpec {
   std::vector<StreamId> reads;
   std::vector<StreamId> writes;       // fixed-length outputs
   std::vector<StreamId> emits;        // variable-length outputs, through registration
+  std::vector<StreamId> updates;      // fixed-length streams modified in place
   StreamId cull_source, cull_target;  // compaction of cull_source into cull_target
   std::vector<PassArg> args;
   double items_per_work_item = 2;     // expected emissions, to size first segments
@@ -77,6 +81,7 @@ struct PassSpec {
   PassSpec& read(StreamId s) { reads.push_back(s); return *this; }
   PassSpec& write(StreamId s) { writes.push_back(s); return *this; }
   PassSpec& emit(StreamId s) { emits.push_back(s); return *this; }
+  PassSpec& update(StreamId s) { updates.push_back(s); return *this; }
   PassSpec& cull(StreamId source, StreamId target) { cull_source = source; cull_target = target; return *this; }
   PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
   PassSpec& expect_items(double per_work_item) { items_per_work_item = per_work_item; return *this; }
@@ -114,10 +119,11 @@ public:
   const std::vector<ParamSpec>& params() const { return params_; }
   const StreamSpec& stream(StreamId s) const;
 
-  // Pass indices in an order where every stream is written before it is read; among
-  // passes free to go, declaration order. Throws naming the passes on a cycle, a
-  // stream with two writers, a pass that writes what it reads, two passes of one
-  // name, or a culling pass not launched over the stream it culls.
+  // Pass indices in an order where every stream is written (and updated) before it is
+  // read; among passes free to go, declaration order. Throws naming the passes on a
+  // cycle, a stream with two writers, a pass that writes what it reads, an update of a
+  // variable stream or by a pass that emits or culls, two passes of one name, or a
+  // culling pass not launched over the stream it culls.
   std::vector<std::size_t> schedule() const;
 
 private:
