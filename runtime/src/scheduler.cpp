@@ -138,7 +138,7 @@ struct Scheduler::State {
 
   void execute(PassState& p, Redo redo)
   {
-    const std::size_t n = state(p.spec->over).count;
+    const std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     const std::size_t wg = context.work_group_size();
     const std::size_t global = round_up(n, wg);
     const bool segmented = options.registration != Registration::global_atomic;
@@ -173,7 +173,10 @@ struct Scheduler::State {
   // reruns its producer until nothing did.
   void flush(const std::vector<PassState*>& stage)
   {
-    if (stage.empty()) return;
+    // Only variable-length outputs have counters to read.
+    if (std::none_of(stage.begin(), stage.end(),
+                     [](const PassState* p) { return !p->emitters.empty() || p->spec->culls(); }))
+      return;
     const bool atomic = options.registration == Registration::global_atomic;
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());

@@ -72,7 +72,7 @@ std::vector<StreamId> pass_outputs(const PassSpec& p)
 std::vector<StreamId> pass_inputs(const PassSpec& p)
 {
   std::vector<StreamId> in = p.reads;
-  in.push_back(p.over);
+  if (p.launches_over_stream()) in.push_back(p.over);
   if (p.culls()) in.push_back(p.cull_source);
   const auto outputs = pass_outputs(p);
   for (const auto& a : p.args)
@@ -91,7 +91,8 @@ std::vector<std::size_t> StreamGraph::schedule() const
   std::vector<std::vector<std::size_t>> updaters(streams_.size());  // declaration order
   for (std::size_t p = 0; p < passes_.size(); ++p) {
     const auto& pass = passes_[p];
-    if (pass.over.index >= streams_.size()) throw Error("pass " + pass.name + " has no stream to launch over");
+    if (pass.launches_over_stream() && pass.over.index >= streams_.size())
+      throw Error("pass " + pass.name + " is launched over an unknown stream");
     for (std::size_t q = 0; q < p; ++q)
       if (passes_[q].name == pass.name) throw Error("two passes are named " + pass.name);
     if (pass.culls() && pass.cull_source != pass.over)

@@ -68,7 +68,8 @@ template <class T> PassArg value_of(const T& v)
 struct PassSpec {
   std::string name;
   KernelRef kernel{"", ""};
-  StreamId over;                      // one work-item per item of this stream
+  StreamId over;                      // one work-item per item of this stream, or
+  std::size_t items = 0;              // this many work-items when `over` is not set
   std::vector<StreamId> reads;
   std::vector<StreamId> writes;       // fixed-length outputs
   std::vector<StreamId> emits;        // variable-length outputs, through registration
@@ -78,6 +79,8 @@ struct PassSpec {
   double items_per_work_item = 2;     // expected emissions, to size first segments
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
+  PassSpec& launch_items(std::size_t n) { items = n; return *this; }
+  bool launches_over_stream() const { return over.index != 0xffffffffu; }
   PassSpec& read(StreamId s) { reads.push_back(s); return *this; }
   PassSpec& write(StreamId s) { writes.push_back(s); return *this; }
   PassSpec& emit(StreamId s) { emits.push_back(s); return *this; }

@@ -1,0 +1,53 @@
+/* Swept bounds of one mesh's features over a step, and the level-by-level refit of its
+ * BVH (nodes in breadth-first order: a level's nodes are contiguous and their
+ * children lie in the next level). */
+#include "bounds.h"
+
+inline void cs_swept_dop(__global const float* x0, __global const float* x1, const uint* vertices, const int count,
+                         const float separation, __global float* out)
+{
+  float lo[9], hi[9];
+  cs_dop_empty(lo, hi);
+  for (int i = 0; i < count; ++i) {
+    const uint v = vertices[i];
+    cs_dop_add(lo, hi, x0[3 * v], x0[3 * v + 1], x0[3 * v + 2]);
+    cs_dop_add(lo, hi, x1[3 * v], x1[3 * v + 1], x1[3 * v + 2]);
+  }
+  cs_dop_inflate(lo, hi, separation);
+  for (int k = 0; k < 9; ++k) {
+    out[k] = lo[k];
+    out[9 + k] = hi[k];
+  }
+}
+
+/* One work-item per primitive of `corners` vertices (3 faces, 2 edges, 1 vertices). */
+__kernel void cs_primitive_bounds(__global const float* x0, __global const float* x1, __global const uint* primitives,
+                                  const uint corners, const uint n, const float separation, __global float* boxes)
+{
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  uint vertices[3];
+  for (uint c = 0; c < corners; ++c) vertices[c] = corners == 1 ? i : primitives[corners * i + c];
+  cs_swept_dop(x0, x1, vertices, (int)corners, separation, boxes + (size_t)CS_DOP_FLOATS * i);
+}
+
+/* nodes: (left child or -1, face or -1, parent) per node. */
+__kernel void cs_refit_level(__global const int* nodes, __global const float* face_boxes, const uint first,
+                             const uint count, __global float* node_boxes)
+{
+  const uint i = get_global_id(0);
+  if (i >= count) return;
+  const uint node = first + i;
+  const int left = nodes[3 * node], face = nodes[3 * node + 1];
+  __global float* out = node_boxes + (size_t)CS_DOP_FLOATS * node;
+  if (left < 0) {
+    for (int k = 0; k < CS_DOP_FLOATS; ++k) out[k] = face_boxes[(size_t)CS_DOP_FLOATS * face + k];
+    return;
+  }
+  __global const float* a = node_boxes + (size_t)CS_DOP_FLOATS * left;
+  __global const float* b = a + CS_DOP_FLOATS;
+  for (int k = 0; k < 9; ++k) {
+    out[k] = fmin(a[k], b[k]);
+    out[9 + k] = fmax(a[9 + k], b[9 + k]);
+  }
+}

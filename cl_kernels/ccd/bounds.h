@@ -1,0 +1,51 @@
+#ifndef CSTREAMS_CCD_BOUNDS_H
+#define CSTREAMS_CCD_BOUNDS_H
+/* Swept 18-DOPs in single precision, conservative for the exact (double) positions.
+ *
+ * Positions arrive as floats rounded to nearest, so each exact coordinate lies within
+ * [cs_fdown(x), cs_fup(x)]; projections on the six diagonal axes add two such bounds
+ * and round outward again. A DOP is 18 floats: lo[0..8] then hi[0..8], axes x, y, z,
+ * x+y, x-y, y+z, y-z, z+x, z-x. host/src/bounds_f.cpp repeats this arithmetic
+ * operation for operation, so host and device boxes are equal bit for bit. */
+#pragma OPENCL FP_CONTRACT OFF
+
+#define CS_DOP_FLOATS 18
+
+inline float cs_fdown(float x) { return x - (fabs(x) * 0x1p-23f + FLT_MIN); }
+inline float cs_fup(float x) { return x + (fabs(x) * 0x1p-23f + FLT_MIN); }
+
+inline void cs_dop_empty(float lo[9], float hi[9])
+{
+  for (int k = 0; k < 9; ++k) {
+    lo[k] = INFINITY;
+    hi[k] = -INFINITY;
+  }
+}
+
+inline void cs_dop_add(float lo[9], float hi[9], const float x, const float y, const float z)
+{
+  const float xl = cs_fdown(x), xh = cs_fup(x), yl = cs_fdown(y), yh = cs_fup(y), zl = cs_fdown(z), zh = cs_fup(z);
+  const float l[9] = {xl, yl, zl, cs_fdown(xl + yl), cs_fdown(xl - yh), cs_fdown(yl + zl), cs_fdown(yl - zh),
+                      cs_fdown(zl + xl), cs_fdown(zl - xh)};
+  const float h[9] = {xh, yh, zh, cs_fup(xh + yh), cs_fup(xh - yl), cs_fup(yh + zh), cs_fup(yh - zl),
+                      cs_fup(zh + xh), cs_fup(zh - xl)};
+  for (int k = 0; k < 9; ++k) {
+    lo[k] = fmin(lo[k], l[k]);
+    hi[k] = fmax(hi[k], h[k]);
+  }
+}
+
+/* Grows every slab by the separation in space: by s on the coordinate axes and by
+ * s * sqrt(2) (rounded up) on the diagonals, whose axis vectors have that length. */
+inline void cs_dop_inflate(float lo[9], float hi[9], const float separation)
+{
+  if (separation <= 0) return;
+  const float diagonal = cs_fup(separation * 1.41421366f);
+  for (int k = 0; k < 9; ++k) {
+    const float grow = k < 3 ? separation : diagonal;
+    lo[k] = cs_fdown(lo[k] - grow);
+    hi[k] = cs_fup(hi[k] + grow);
+  }
+}
+
+#endif
