@@ -102,9 +102,11 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
     kernel_.set_arg(index++, options_.tolerance);
     kernel_.set_arg(index++, options_.min_separation);
   } else {
-    // Rounded up, so the float solver is never stricter than asked.
-    kernel_.set_arg(index++, std::nextafter(float(options_.tolerance), 1.0f));
-    kernel_.set_arg(index++, std::nextafter(float(options_.min_separation), 1.0f) * (options_.min_separation > 0));
+    // One float step up from the nearest float, so the float solver is never stricter
+    // than asked (a separation of 0 stays 0).
+    const float inf = std::numeric_limits<float>::infinity();
+    kernel_.set_arg(index++, std::nextafter(float(options_.tolerance), inf));
+    kernel_.set_arg(index++, options_.min_separation > 0 ? std::nextafter(float(options_.min_separation), inf) : 0.0f);
   }
   kernel_.set_arg(index++, cl_uint(options_.max_iterations));
   kernel_.set_arg(index++, cl_uint(options_.filter));

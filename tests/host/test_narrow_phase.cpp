@@ -229,6 +229,14 @@ TEST_CASE("a minimum separation makes near misses collide", "[narrow][quick]")
     DeviceSolver separated(cstreams::test::device(), o);
     CHECK(separated.solve(ContactKind::vertex_face, {q})[0].collides());
   }
+  // A separation above 1 (scene units) is honoured too: the vertex passes 1.5 above.
+  const Query far = query({in + Vec3(0, 0, 1.5), A, B, C}, {in + Vec3(0.1, 0, 1.5), A, B, C});
+  for (Precision p : precisions()) {
+    auto o = conservative(p);
+    o.min_separation = 1.5;
+    DeviceSolver separated(cstreams::test::device(), o);
+    CHECK(separated.solve(ContactKind::vertex_face, {far})[0].collides());
+  }
 }
 
 TEST_CASE("the unit-test queries: conservative misses none, cubic is measured", "[narrow][quick]")
