@@ -90,6 +90,13 @@ bool Kdop18f::contains(const Kdop18& exact) const
   return true;
 }
 
+bool Kdop18f::overlaps(const Kdop18f& o) const
+{
+  for (std::size_t k = 0; k < 9; ++k)
+    if (lo[k] > o.hi[k] || o.lo[k] > hi[k]) return false;
+  return true;
+}
+
 FloatBounds float_bounds(const Topology& t, const Bvh& bvh, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1,
                          float separation)
 {

@@ -3,6 +3,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <mutex>
 
 namespace cstreams {
@@ -50,8 +52,11 @@ namespace {
 
 using FacePairs = std::vector<std::pair<std::uint32_t, std::uint32_t>>;
 
-// Face pairs of overlapping BVs, by traversing the BVTT of two trees (or one, for self).
-FacePairs traverse(const Bvh& a, const Bvh& b, bool self)
+// Face pairs of overlapping BVs, by traversing the BVTT of two trees (or one, for
+// self): tree layouts from `a` and `b`, node boxes from `boxes_a` and `boxes_b`.
+template <class Box>
+FacePairs traverse(const Bvh& a, const std::vector<Box>& boxes_a, const Bvh& b, const std::vector<Box>& boxes_b,
+                   bool self)
 {
   FacePairs out;
   if (a.nodes.empty() || b.nodes.empty()) return out;
@@ -67,7 +72,7 @@ FacePairs traverse(const Bvh& a, const Bvh& b, bool self)
       stack.push_back({ni.left, ni.left + 1});
       continue;
     }
-    if (!a.boxes[std::size_t(i)].overlaps(b.boxes[std::size_t(j)])) continue;
+    if (!boxes_a[std::size_t(i)].overlaps(boxes_b[std::size_t(j)])) continue;
     if (ni.left < 0 && nj.left < 0) {
       out.emplace_back(std::uint32_t(ni.face), std::uint32_t(nj.face));
     } else if (nj.left < 0 || (ni.left >= 0 && i <= j)) {
@@ -81,14 +86,19 @@ FacePairs traverse(const Bvh& a, const Bvh& b, bool self)
   return out;
 }
 
-FacePairs brute_force(const SweptBounds& a, const SweptBounds& b, bool self)
+template <class Box> FacePairs brute_force(const std::vector<Box>& a, const std::vector<Box>& b, bool self)
 {
   FacePairs out;
-  for (std::uint32_t i = 0; i < a.faces.size(); ++i)
-    for (std::uint32_t j = self ? i + 1 : 0; j < b.faces.size(); ++j)
-      if (a.faces[i].overlaps(b.faces[j])) out.emplace_back(i, j);
+  for (std::uint32_t i = 0; i < a.size(); ++i)
+    for (std::uint32_t j = self ? i + 1 : 0; j < b.size(); ++j)
+      if (a[i].overlaps(b[j])) out.emplace_back(i, j);
   return out;
 }
+
+// The bounds of one object in either precision, the tree's node boxes included.
+template <class Box> struct Bounds {
+  std::vector<Box> faces, edges, vertices, nodes;
+};
 
 template <class T> void sort_unique(std::vector<T>& v)
 {
@@ -98,25 +108,24 @@ template <class T> void sort_unique(std::vector<T>& v)
 
 }  // namespace
 
-Candidates reference_broad_phase(const Step& step, const ReferenceOptions& options)
+namespace {
+
+template <class Box>
+Candidates candidates(const Step& step, const std::vector<Bounds<Box>>& bounds, const std::vector<Bvh>& trees,
+                      BroadPhase broad_phase)
 {
   const Scene& scene = *step.scene;
-  const std::size_t n = scene.objects.size();
-  std::vector<SweptBounds> bounds(n);
-  std::vector<Bvh> trees(n);
-  for (std::size_t o = 0; o < n; ++o) {
-    bounds[o] = swept_bounds(scene.objects[o].topology, step.x0[o], step.x1[o], options.solver.min_separation);
-    if (options.broad_phase == BroadPhase::bvh) trees[o] = build_bvh(bounds[o].faces);
-  }
-
+  const std::uint32_t n = std::uint32_t(scene.objects.size());
   Candidates out;
   for (std::uint32_t a = 0; a < n; ++a)
     for (std::uint32_t b = a; b < n; ++b) {
       if (!scene.may_collide(a, b)) continue;
       const bool self = a == b;
       const Topology &ta = scene.objects[a].topology, &tb = scene.objects[b].topology;
-      const FacePairs pairs = options.broad_phase == BroadPhase::bvh ? traverse(trees[a], trees[b], self)
-                                                                     : brute_force(bounds[a], bounds[b], self);
+      const Bounds<Box>&bounds_a = bounds[a], &bounds_b = bounds[b];
+      const FacePairs pairs = broad_phase == BroadPhase::bvh
+                                  ? traverse(trees[a], bounds_a.nodes, trees[b], bounds_b.nodes, self)
+                                  : brute_force(bounds_a.faces, bounds_b.faces, self);
       CandidateBlock ab{a, b, {}, {}}, ba{b, a, {}, {}};
       std::vector<VertexFace> vf_ab, vf_ba;
       std::vector<EdgeEdge> ee;
@@ -133,13 +142,12 @@ Candidates reference_broad_phase(const Step& step, const ReferenceOptions& optio
           if (e.a > e.b) std::swap(e.a, e.b);
         ee.insert(ee.end(), orphans.ee.begin(), orphans.ee.end());
       }
-      const SweptBounds &ba_bounds = bounds[a], &bb_bounds = bounds[b];
       for (const auto& p : vf_ab)
-        if (ba_bounds.vertices[p.vertex].overlaps(bb_bounds.faces[p.face])) ab.vf.push_back(p);
+        if (bounds_a.vertices[p.vertex].overlaps(bounds_b.faces[p.face])) ab.vf.push_back(p);
       for (const auto& p : vf_ba)
-        if (bb_bounds.vertices[p.vertex].overlaps(ba_bounds.faces[p.face])) ba.vf.push_back(p);
+        if (bounds_b.vertices[p.vertex].overlaps(bounds_a.faces[p.face])) ba.vf.push_back(p);
       for (const auto& p : ee)
-        if (ba_bounds.edges[p.a].overlaps(bb_bounds.edges[p.b])) ab.ee.push_back(p);
+        if (bounds_a.edges[p.a].overlaps(bounds_b.edges[p.b])) ab.ee.push_back(p);
       sort_unique(ab.vf);
       sort_unique(ab.ee);
       sort_unique(ba.vf);
@@ -150,6 +158,37 @@ Candidates reference_broad_phase(const Step& step, const ReferenceOptions& optio
     return x.object_a != y.object_a ? x.object_a < y.object_a : x.object_b < y.object_b;
   });
   return out;
+}
+
+}  // namespace
+
+Candidates reference_broad_phase(const Step& step, const ReferenceOptions& options)
+{
+  const Scene& scene = *step.scene;
+  const std::size_t n = scene.objects.size();
+  const double separation = options.solver.min_separation;
+  // Trees are always built from the exact boxes, so both precisions share their layout.
+  std::vector<SweptBounds> exact(n);
+  std::vector<Bvh> trees(n);
+  for (std::size_t o = 0; o < n; ++o) {
+    exact[o] = swept_bounds(scene.objects[o].topology, step.x0[o], step.x1[o], separation);
+    trees[o] = build_bvh(exact[o].faces);
+  }
+  if (options.bounds == BoundsPrecision::double_) {
+    std::vector<Bounds<Kdop18>> bounds(n);
+    for (std::size_t o = 0; o < n; ++o)
+      bounds[o] = {std::move(exact[o].faces), std::move(exact[o].edges), std::move(exact[o].vertices), trees[o].boxes};
+    return candidates(step, bounds, trees, options.broad_phase);
+  }
+  // The float separation is rounded up, so the float boxes stay conservative.
+  const float float_separation =
+      separation > 0 ? std::nextafter(float(separation), std::numeric_limits<float>::infinity()) : 0.0f;
+  std::vector<Bounds<Kdop18f>> bounds(n);
+  for (std::size_t o = 0; o < n; ++o) {
+    FloatBounds f = float_bounds(scene.objects[o].topology, trees[o], step.x0[o], step.x1[o], float_separation);
+    bounds[o] = {std::move(f.faces), std::move(f.edges), std::move(f.vertices), std::move(f.nodes)};
+  }
+  return candidates(step, bounds, trees, options.broad_phase);
 }
 
 Query vertex_face_query(const Step& step, std::uint32_t oa, std::uint32_t ob, VertexFace p)

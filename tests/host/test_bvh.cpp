@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <random>
 #include <unistd.h>
 
@@ -100,5 +101,38 @@ TEST_CASE("BVH traversal and brute force find the same candidates", "[host][bvh]
     const Candidates xs = reference_broad_phase(step, bvh);
     CHECK(xs == reference_broad_phase(step, brute));
     CHECK(xs.vf_count() > x.vf_count());
+    // The device's float boxes: traversal and brute force agree there too.
+    bvh.bounds = brute.bounds = BoundsPrecision::single;
+    CHECK(reference_broad_phase(step, bvh) == reference_broad_phase(step, brute));
+  }
+}
+
+namespace {
+template <class Pair> bool includes(const std::vector<Pair>& big, const std::vector<Pair>& small)
+{
+  return std::includes(big.begin(), big.end(), small.begin(), small.end());
+}
+}  // namespace
+
+TEST_CASE("float-box candidates contain the exact-box candidates", "[host][bvh][quick]")
+{
+  const Mesh a = cloth_and_ball(0), b = cloth_and_ball(0.45);
+  char templ[] = "/tmp/cstreams-bvhf-XXXXXX";
+  const std::string dir = mkdtemp(templ);
+  write_ply(dir + "/0.ply", a);
+  write_ply(dir + "/1.ply", b);
+  const Scene scene = scene_from_frames({dir + "/0.ply", dir + "/1.ply"}, true);
+  const Step step = load_step(scene, 0);
+  for (double separation : {0.0, 0.01}) {
+    ReferenceOptions exact, single;
+    exact.solver.min_separation = single.solver.min_separation = separation;
+    single.bounds = BoundsPrecision::single;
+    const Candidates x = reference_broad_phase(step, exact), f = reference_broad_phase(step, single);
+    REQUIRE(x.blocks.size() == f.blocks.size());
+    for (std::size_t i = 0; i < x.blocks.size(); ++i) {
+      CHECK(includes(f.blocks[i].vf, x.blocks[i].vf));
+      CHECK(includes(f.blocks[i].ee, x.blocks[i].ee));
+    }
+    CHECK(f.vf_count() >= x.vf_count());
   }
 }

@@ -20,6 +20,7 @@ struct Kdop18f {
   std::array<float, 9> hi;
   friend bool operator==(const Kdop18f& a, const Kdop18f& b) { return a.lo == b.lo && a.hi == b.hi; }
   bool contains(const Kdop18& exact) const;
+  bool overlaps(const Kdop18f& other) const;
 };
 
 // Swept single-precision bounds of one mesh over a step, and its BVH's node boxes.

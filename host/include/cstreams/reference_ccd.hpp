@@ -1,6 +1,7 @@
 #pragma once
 #include <cstreams/bvh.hpp>
 #include <cstreams/contacts.hpp>
+#include <cstreams/device_bvh.hpp>
 #include <cstreams/reference_solver.hpp>
 #include <cstreams/scene.hpp>
 #include <cstreams/topology.hpp>
@@ -34,9 +35,13 @@ struct Candidates {
 };
 
 enum class BroadPhase { bvh, brute_force };
+// Double: the host's own outward-rounded boxes. Single: the device's float boxes
+// (float_bounds), so the candidates are exactly those a device pipeline must find.
+enum class BoundsPrecision { double_, single };
 
 struct ReferenceOptions {
   BroadPhase broad_phase = BroadPhase::bvh;
+  BoundsPrecision bounds = BoundsPrecision::double_;
   ReferenceSolverOptions solver;  // its min_separation also inflates the BVs
 };
 
