@@ -46,7 +46,9 @@ void inflate(Kdop18f& d, float separation)
   }
 }
 
-std::vector<float> to_float(const std::vector<Vec3>& x)
+}  // namespace
+
+std::vector<float> to_float_positions(const std::vector<Vec3>& x)
 {
   std::vector<float> out(3 * x.size());
   for (std::size_t i = 0; i < x.size(); ++i)
@@ -57,6 +59,8 @@ std::vector<float> to_float(const std::vector<Vec3>& x)
     }
   return out;
 }
+
+namespace {
 
 Kdop18f swept(const std::vector<float>& x0, const std::vector<float>& x1, const std::uint32_t* v, int count,
               float separation)
@@ -70,7 +74,9 @@ Kdop18f swept(const std::vector<float>& x0, const std::vector<float>& x1, const 
   return d;
 }
 
-std::vector<Kdop18f> unpack(const std::vector<float>& flat)
+}  // namespace
+
+std::vector<Kdop18f> unpack_dops(const std::vector<float>& flat)
 {
   std::vector<Kdop18f> out(flat.size() / 18);
   for (std::size_t i = 0; i < out.size(); ++i)
@@ -80,8 +86,6 @@ std::vector<Kdop18f> unpack(const std::vector<float>& flat)
     }
   return out;
 }
-
-}  // namespace
 
 bool Kdop18f::contains(const Kdop18& exact) const
 {
@@ -100,7 +104,7 @@ bool Kdop18f::overlaps(const Kdop18f& o) const
 FloatBounds float_bounds(const Topology& t, const Bvh& bvh, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1,
                          float separation)
 {
-  const auto f0 = to_float(x0), f1 = to_float(x1);
+  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
   FloatBounds b;
   for (const Face& f : t.faces) b.faces.push_back(swept(f0, f1, f.data(), 3, separation));
   for (const Edge& e : t.edges) b.edges.push_back(swept(f0, f1, e.data(), 2, separation));
@@ -121,18 +125,12 @@ FloatBounds float_bounds(const Topology& t, const Bvh& bvh, const std::vector<Ve
   return b;
 }
 
-struct DeviceBvh::Streams {
-  runtime::StreamId x0, x1, faces, edges, nodes, face_boxes, edge_boxes, vertex_boxes, node_boxes;
-};
-
-DeviceBvh::DeviceBvh(runtime::Context& context, const Topology& t, const Bvh& bvh, float separation)
-    : streams_(std::make_unique<Streams>()), vertex_count_(t.vertex_count)
+BoundsStreams add_bounds_passes(runtime::StreamGraph& g, const Topology& t, const Bvh& bvh, float separation)
 {
   using namespace runtime;
-  context.programs().add_sources(ccd_kernel_sources());
+  if (separation < 0) throw InputError("minimum separation must not be negative");
   const char* program = "ccd/bounds.cl";
-  StreamGraph g;
-  Streams& s = *streams_;
+  BoundsStreams s;
   s.x0 = g.fixed("x0", 12, t.vertex_count);
   s.x1 = g.fixed("x1", 12, t.vertex_count);
   s.faces = g.fixed("faces", 12, t.faces.size());
@@ -171,12 +169,27 @@ DeviceBvh::DeviceBvh(runtime::Context& context, const Topology& t, const Bvh& bv
         .arg(value_of(count))
         .arg(buffer_of(s.node_boxes));
   }
-  scheduler_ = std::make_unique<Scheduler>(context, std::move(g), SchedulerOptions{Registration::segmented_lock, true});
-  scheduler_->upload(s.faces, t.faces);
-  scheduler_->upload(s.edges, t.edges);
+  return s;
+}
+
+void upload_topology(runtime::Scheduler& scheduler, const BoundsStreams& s, const Topology& t, const Bvh& bvh)
+{
+  scheduler.upload(s.faces, t.faces);
+  scheduler.upload(s.edges, t.edges);
   std::vector<std::int32_t> nodes;
   for (const BvhNode& n : bvh.nodes) nodes.insert(nodes.end(), {n.left, n.face, n.parent});
-  scheduler_->upload(s.nodes, nodes.data(), bvh.nodes.size());
+  scheduler.upload(s.nodes, nodes.data(), bvh.nodes.size());
+}
+
+DeviceBvh::DeviceBvh(runtime::Context& context, const Topology& t, const Bvh& bvh, float separation)
+    : vertex_count_(t.vertex_count)
+{
+  using namespace runtime;
+  context.programs().add_sources(ccd_kernel_sources());
+  StreamGraph g;
+  streams_ = add_bounds_passes(g, t, bvh, separation);
+  scheduler_ = std::make_unique<Scheduler>(context, std::move(g), SchedulerOptions{Registration::segmented_lock, true});
+  upload_topology(*scheduler_, streams_, t, bvh);
 }
 
 DeviceBvh::~DeviceBvh() = default;
@@ -186,19 +199,19 @@ void DeviceBvh::refit(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1)
   if (x0.size() != vertex_count_ || x1.size() != vertex_count_)
     throw InputError("positions for " + std::to_string(x0.size()) + " and " + std::to_string(x1.size()) +
                      " vertices given to a mesh of " + std::to_string(vertex_count_));
-  const auto f0 = to_float(x0), f1 = to_float(x1);
-  scheduler_->upload(streams_->x0, f0.data(), vertex_count_);
-  scheduler_->upload(streams_->x1, f1.data(), vertex_count_);
+  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
+  scheduler_->upload(streams_.x0, f0.data(), vertex_count_);
+  scheduler_->upload(streams_.x1, f1.data(), vertex_count_);
   scheduler_->run();
 }
 
 FloatBounds DeviceBvh::download() const
 {
-  const Streams& s = *streams_;
+  const BoundsStreams& s = streams_;
   auto get = [&](runtime::StreamId id) {
     std::vector<float> flat(scheduler_->count(id) * 18);
     scheduler_->download(id, flat.data(), scheduler_->count(id));
-    return unpack(flat);
+    return unpack_dops(flat);
   };
   return {get(s.face_boxes), get(s.edge_boxes), get(s.vertex_boxes), get(s.node_boxes)};
 }

@@ -33,6 +33,20 @@ struct FloatBounds {
 FloatBounds float_bounds(const Topology& topology, const Bvh& bvh, const std::vector<Vec3>& x0,
                          const std::vector<Vec3>& x1, float separation);
 
+// The streams of one mesh's bounds graph (positions, topology, tree, boxes).
+struct BoundsStreams {
+  runtime::StreamId x0, x1, faces, edges, nodes, face_boxes, edge_boxes, vertex_boxes, node_boxes;
+};
+// Adds to `graph` the passes that compute one mesh's swept float bounds and refit its
+// BVH level by level (see DeviceBvh), and returns their streams.
+BoundsStreams add_bounds_passes(runtime::StreamGraph& graph, const Topology& topology, const Bvh& bvh,
+                                float separation);
+// Uploads what add_bounds_passes' graph needs once (faces, edges, tree layout).
+void upload_topology(runtime::Scheduler& scheduler, const BoundsStreams& s, const Topology& topology, const Bvh& bvh);
+// Rounds positions to float (an InputError for a non-finite or out-of-range one).
+std::vector<float> to_float_positions(const std::vector<Vec3>& x);
+std::vector<Kdop18f> unpack_dops(const std::vector<float>& flat);
+
 // One mesh's swept bounds and BVH refit on a device, as a stream graph: three bounds
 // passes (faces, edges, vertices) and one in-place refit pass per BVH level, deepest
 // first. The topology and the tree layout are uploaded once; each step uploads the
@@ -47,8 +61,7 @@ public:
   const runtime::RunStats& stats() const;
 
 private:
-  struct Streams;
-  std::unique_ptr<Streams> streams_;
+  BoundsStreams streams_;
   std::unique_ptr<runtime::Scheduler> scheduler_;
   std::size_t vertex_count_;
 };

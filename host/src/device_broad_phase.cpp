@@ -1,0 +1,150 @@
+#include <cstreams/device_broad_phase.hpp>
+#include <cstreams/errors.hpp>
+#include <cstreams/narrow_phase.hpp>
+#include <cstreams/runtime/context.hpp>
+
+#include <algorithm>
+
+namespace cstreams {
+
+namespace {
+// Must match CS_BVTT_STACK in cl_kernels/ccd/broad_phase.cl: three pushes per level.
+constexpr std::size_t max_tree_depth = 40;
+using Pair = std::array<std::uint32_t, 2>;
+}  // namespace
+
+std::vector<std::array<std::int32_t, 2>> seed_front(const Bvh& bvh, std::size_t target)
+{
+  std::vector<std::array<std::int32_t, 2>> front{{0, 0}};
+  while (front.size() < target) {
+    std::vector<std::array<std::int32_t, 2>> next;
+    bool expanded = false;
+    for (const auto& [i, j] : front) {
+      const std::int32_t li = bvh.nodes[std::size_t(i)].left, lj = bvh.nodes[std::size_t(j)].left;
+      // The same choices as the traversal kernel, without the bounds tests.
+      if (i == j) {
+        if (li < 0) continue;  // a leaf against itself pairs nothing
+        next.insert(next.end(), {{li, li}, {li + 1, li + 1}, {li, li + 1}});
+      } else if (li < 0 && lj < 0) {
+        next.push_back({i, j});
+        continue;
+      } else if (lj < 0 || (li >= 0 && i <= j)) {
+        next.insert(next.end(), {{li, j}, {li + 1, j}});
+      } else {
+        next.insert(next.end(), {{i, lj}, {i, lj + 1}});
+      }
+      expanded = true;
+    }
+    front = std::move(next);
+    if (!expanded) break;
+  }
+  return front;
+}
+
+struct DeviceBroadPhase::Streams {
+  BoundsStreams bounds;
+  runtime::StreamId seeds, face_edges, owned, triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
+};
+
+DeviceBroadPhase::DeviceBroadPhase(runtime::Context& context, const Topology& t, const Bvh& bvh, float separation,
+                                   runtime::Registration registration)
+    : streams_(std::make_unique<Streams>()), vertex_count_(t.vertex_count)
+{
+  using namespace runtime;
+  if (bvh.depth() > max_tree_depth)
+    throw Error("a BVH of depth " + std::to_string(bvh.depth()) + " is deeper than the traversal's stack allows (" +
+                std::to_string(max_tree_depth) + ")");
+  context.programs().add_sources(ccd_kernel_sources());
+  const char* program = "ccd/broad_phase.cl";
+  const auto seeds = seed_front(bvh, 4 * context.device().compute_units * context.work_group_size());
+  const OrphanSet orphans = build_orphans(t);
+  // Expected sizes only; every variable stream grows as its counter demands.
+  const std::size_t guess = std::max<std::size_t>(1024, t.faces.size());
+
+  StreamGraph g;
+  Streams& s = *streams_;
+  s.bounds = add_bounds_passes(g, t, bvh, separation);
+  s.seeds = g.fixed("bvtt seeds", 8, seeds.size());
+  s.face_edges = g.fixed("face edges", 12, t.faces.size());
+  s.owned = g.fixed("ownership", 4, t.faces.size());
+  s.orphan_vf = g.fixed("orphan vf", 8, orphans.vf.size());
+  s.orphan_ee = g.fixed("orphan ee", 8, orphans.ee.size());
+  s.triangle_pairs = g.variable("triangle pairs", 8, guess);
+  s.vf = g.variable("vf candidates", 8, guess);
+  s.ee = g.variable("ee candidates", 8, guess);
+  s.kept_vf = g.variable("orphan vf candidates", 8, guess / 4);
+  s.kept_ee = g.variable("orphan ee candidates", 8, guess / 4);
+  const BoundsStreams& b = s.bounds;
+  g.pass("traverse", {program, "cs_traverse"})
+      .launch_over(s.seeds)
+      .read(b.node_boxes)
+      .emit(s.triangle_pairs)
+      .expect_items(4)
+      .arg(buffer_of(s.seeds))
+      .arg(count_of(s.seeds))
+      .arg(buffer_of(b.nodes))
+      .arg(buffer_of(b.node_boxes))
+      .arg(buffer_of(b.faces));
+  g.pass("decompose", {program, "cs_decompose"})
+      .launch_over(s.triangle_pairs)
+      .emit(s.vf)
+      .emit(s.ee)
+      .arg(buffer_of(s.triangle_pairs))
+      .arg(count_of(s.triangle_pairs))
+      .arg(buffer_of(b.faces))
+      .arg(buffer_of(s.face_edges))
+      .arg(buffer_of(s.owned))
+      .arg(buffer_of(b.vertex_boxes))
+      .arg(buffer_of(b.edge_boxes))
+      .arg(buffer_of(b.face_boxes));
+  g.pass("cull orphan vf", {program, "cs_cull_pairs"})
+      .launch_over(s.orphan_vf)
+      .cull(s.orphan_vf, s.kept_vf)
+      .arg(buffer_of(s.orphan_vf))
+      .arg(count_of(s.orphan_vf))
+      .arg(buffer_of(b.vertex_boxes))
+      .arg(buffer_of(b.face_boxes));
+  g.pass("cull orphan ee", {program, "cs_cull_pairs"})
+      .launch_over(s.orphan_ee)
+      .cull(s.orphan_ee, s.kept_ee)
+      .arg(buffer_of(s.orphan_ee))
+      .arg(count_of(s.orphan_ee))
+      .arg(buffer_of(b.edge_boxes))
+      .arg(buffer_of(b.edge_boxes));
+  scheduler_ = std::make_unique<Scheduler>(context, std::move(g), SchedulerOptions{registration, true});
+
+  upload_topology(*scheduler_, b, t, bvh);
+  scheduler_->upload(s.seeds, seeds);
+  scheduler_->upload(s.face_edges, t.face_edges);
+  std::vector<std::uint32_t> owned(t.owned.begin(), t.owned.end());
+  scheduler_->upload(s.owned, owned);
+  scheduler_->upload(s.orphan_vf, orphans.vf);
+  scheduler_->upload(s.orphan_ee, orphans.ee);
+}
+
+DeviceBroadPhase::~DeviceBroadPhase() = default;
+
+Candidates DeviceBroadPhase::run(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1)
+{
+  if (x0.size() != vertex_count_ || x1.size() != vertex_count_)
+    throw InputError("positions for " + std::to_string(x0.size()) + " and " + std::to_string(x1.size()) +
+                     " vertices given to a mesh of " + std::to_string(vertex_count_));
+  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
+  const Streams& s = *streams_;
+  scheduler_->upload(s.bounds.x0, f0.data(), vertex_count_);
+  scheduler_->upload(s.bounds.x1, f1.data(), vertex_count_);
+  scheduler_->run();
+
+  CandidateBlock block{0, 0, {}, {}};
+  for (auto stream : {s.vf, s.kept_vf})
+    for (const auto& p : scheduler_->download<Pair>(stream)) block.vf.push_back({p[0], p[1]});
+  for (auto stream : {s.ee, s.kept_ee})
+    for (const auto& p : scheduler_->download<Pair>(stream)) block.ee.push_back({p[0], p[1]});
+  std::sort(block.vf.begin(), block.vf.end());
+  std::sort(block.ee.begin(), block.ee.end());
+  Candidates out;
+  out.blocks.push_back(std::move(block));
+  return out;
+}
+
+}  // namespace cstreams
