@@ -84,19 +84,20 @@ inline int cs_cubic_roots(const real k[4], real roots[3])
   return count;
 }
 
-inline void cs_point_at(__global const real* q, const size_t index, const int point, const real t, real out[3])
+/* q: the query's 24 coordinates, points x[0..3] at t = 0 then at t = 1. */
+inline void cs_point_at(const real* q, const int point, const real t, real out[3])
 {
   for (int k = 0; k < 3; ++k) {
-    const real x0 = q[index * 24 + point * 3 + k], x1 = q[index * 24 + (point + 4) * 3 + k];
+    const real x0 = q[point * 3 + k], x1 = q[(point + 4) * 3 + k];
     out[k] = x0 + (x1 - x0) * t;
   }
 }
 
 /* Do the features touch at time t (within eps, in scene units)? */
-inline int cs_touching(__global const real* q, const size_t index, const int vertex_face, const real t, const real eps)
+inline int cs_touching(const real* q, const int vertex_face, const real t, const real eps)
 {
   real x[4][3];
-  for (int i = 0; i < 4; ++i) cs_point_at(q, index, i, t, x[i]);
+  for (int i = 0; i < 4; ++i) cs_point_at(q, i, t, x[i]);
   if (vertex_face) { /* barycentric coordinates of the vertex's projection */
     real e0[3], e1[3], d[3];
     cs_sub3(x[2], x[1], e0);
@@ -146,14 +147,14 @@ inline int cs_touching(__global const real* q, const size_t index, const int ver
   return cs_dot3(gap, gap) <= eps * eps;
 }
 
-inline uint cs_cubic(__global const real* q, const size_t index, const int vertex_face, const real tolerance, real* toi)
+inline uint cs_cubic(const real* q, const int vertex_face, const real tolerance, real* toi)
 {
   real x0[4][3], v[4][3];
   real scale = 0;
   for (int i = 0; i < 4; ++i) {
-    cs_point_at(q, index, i, 0, x0[i]);
+    cs_point_at(q, i, 0, x0[i]);
     real x1[3];
-    cs_point_at(q, index, i, 1, x1);
+    cs_point_at(q, i, 1, x1);
     cs_sub3(x1, x0[i], v[i]);
     for (int k = 0; k < 3; ++k) scale = fmax(scale, fmax(fabs(x0[i][k]), fabs(x1[k])));
   }
@@ -178,7 +179,7 @@ inline uint cs_cubic(__global const real* q, const size_t index, const int verte
   const int count = cs_cubic_roots(k, roots);
   const real eps = tolerance * fmax(scale, CS_TINY);
   for (int i = 0; i < count; ++i)
-    if (cs_touching(q, index, vertex_face, roots[i], eps)) {
+    if (cs_touching(q, vertex_face, roots[i], eps)) {
       *toi = roots[i];
       return CS_COLLIDES;
     }

@@ -24,7 +24,9 @@ __kernel void cs_narrow_phase(__global const real* queries, const uint n, const 
   } else {
 #if CS_SOLVER == CS_SOLVER_CUBIC
     (void)max_iterations;
-    s = cs_cubic(queries, i, vertex_face, tolerance, &t);
+    real plain[24];
+    for (int j = 0; j < 24; ++j) plain[j] = queries[i * 24 + j];
+    s = cs_cubic(plain, vertex_face, tolerance, &t);
 #else
     s = cs_conservative(&q, vertex_face, tolerance, separation, max_iterations, &t);
 #endif

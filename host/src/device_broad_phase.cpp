@@ -4,6 +4,9 @@
 #include <cstreams/runtime/context.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
 
 namespace cstreams {
 
@@ -44,11 +47,13 @@ std::vector<std::array<std::int32_t, 2>> seed_front(const Bvh& bvh, std::size_t 
 struct DeviceBroadPhase::Streams {
   BoundsStreams bounds;
   runtime::StreamId seeds, face_edges, owned, triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
+  std::vector<std::pair<runtime::StreamId, ContactKind>> contacts;  // one per candidate stream
 };
 
 DeviceBroadPhase::DeviceBroadPhase(runtime::Context& context, const Topology& t, const Bvh& bvh, float separation,
-                                   runtime::Registration registration)
-    : streams_(std::make_unique<Streams>()), vertex_count_(t.vertex_count)
+                                   runtime::Registration registration, std::optional<SolverOptions> narrow_phase)
+    : streams_(std::make_unique<Streams>()), vertex_count_(t.vertex_count), topology_(t),
+      narrow_phase_(narrow_phase.has_value())
 {
   using namespace runtime;
   if (bvh.depth() > max_tree_depth)
@@ -111,6 +116,41 @@ DeviceBroadPhase::DeviceBroadPhase(runtime::Context& context, const Topology& t,
       .arg(count_of(s.orphan_ee))
       .arg(buffer_of(b.edge_boxes))
       .arg(buffer_of(b.edge_boxes));
+  if (narrow_phase) {
+    const SolverOptions& o = *narrow_phase;
+    if (o.precision != Precision::single)
+      throw Error("the device pipeline runs its elementary tests in single precision only, for now");
+    const std::string options = "-DCS_REAL_DOUBLE=0 -DCS_SOLVER=" + std::to_string(o.solver == Solver::conservative) +
+                                " -DCS_STACK_SIZE=96 -cl-denorms-are-zero";
+    const float up = std::numeric_limits<float>::infinity();
+    const float tolerance = std::nextafter(float(o.tolerance), up);
+    const float min_separation = o.min_separation > 0 ? std::nextafter(float(o.min_separation), up) : 0.0f;
+    const std::pair<StreamId, ContactKind> inputs[] = {{s.vf, ContactKind::vertex_face},
+                                                       {s.kept_vf, ContactKind::vertex_face},
+                                                       {s.ee, ContactKind::edge_edge},
+                                                       {s.kept_ee, ContactKind::edge_edge}};
+    for (const auto& [input, kind] : inputs) {
+      const std::string name = g.stream(input).name;
+      const StreamId out = g.variable("contacts from " + name, 16, 256);
+      g.pass("test " + name, {"ccd/narrow_phase_pairs.cl", "cs_narrow_phase_pairs", options})
+          .launch_over(input)
+          .emit(out)
+          .expect_items(0.25)
+          .arg(buffer_of(input))
+          .arg(count_of(input))
+          .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
+          .arg(buffer_of(b.x0))
+          .arg(buffer_of(b.x1))
+          .arg(buffer_of(b.faces))
+          .arg(buffer_of(b.edges))
+          .arg(value_of(cl_uint(0)))
+          .arg(value_of(tolerance))
+          .arg(value_of(min_separation))
+          .arg(value_of(cl_uint(o.max_iterations)))
+          .arg(value_of(cl_uint(o.filter)));
+      s.contacts.emplace_back(out, kind);
+    }
+  }
   scheduler_ = std::make_unique<Scheduler>(context, std::move(g), SchedulerOptions{registration, true});
 
   upload_topology(*scheduler_, b, t, bvh);
@@ -144,6 +184,32 @@ Candidates DeviceBroadPhase::run(const std::vector<Vec3>& x0, const std::vector<
   std::sort(block.ee.begin(), block.ee.end());
   Candidates out;
   out.blocks.push_back(std::move(block));
+  return out;
+}
+
+std::vector<Contact> DeviceBroadPhase::contacts() const
+{
+  if (!narrow_phase_) throw Error("this device broad phase was built without a narrow phase");
+  std::vector<Contact> out;
+  const Topology& t = topology_;
+  for (const auto& [stream, kind] : streams_->contacts)
+    for (const auto& c : scheduler_->download<std::array<std::uint32_t, 4>>(stream)) {
+      float toi;
+      std::memcpy(&toi, &c[3], sizeof toi);
+      Contact contact;
+      contact.kind = kind;
+      contact.toi = toi;
+      if (kind == ContactKind::vertex_face) {
+        const Face& f = t.faces[c[1]];
+        contact.v = {c[0], f[0], f[1], f[2]};
+      } else {
+        Edge a = t.edges[c[0]], b = t.edges[c[1]];
+        if (b < a) std::swap(a, b);
+        contact.v = {a[0], a[1], b[0], b[1]};
+      }
+      out.push_back(contact);
+    }
+  sort_canonical(out);
   return out;
 }
 

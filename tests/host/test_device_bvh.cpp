@@ -4,14 +4,19 @@
 #include <cstreams/device_broad_phase.hpp>
 #include <cstreams/device_bvh.hpp>
 #include <cstreams/errors.hpp>
+#include <cstreams/narrow_phase.hpp>
+#include <cstreams/query_io.hpp>
 #include <cstreams/reference_ccd.hpp>
 #include <cstreams/scenes/generators.hpp>
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <set>
 #include <limits>
 
 using namespace cstreams;
@@ -140,4 +145,61 @@ TEST_CASE("the seed front covers the tree", "[device-bvh][quick]")
   auto sorted = seeds;
   std::sort(sorted.begin(), sorted.end());
   CHECK(std::adjacent_find(sorted.begin(), sorted.end()) == sorted.end());
+}
+
+TEST_CASE("device CCD of one mesh: every true pair, and the solver's answers on the host's candidates",
+          "[device-bvh][quick]")
+{
+  const std::string dir = cstreams::test::shared_path("scenes-data/scalable-ccd-sample/cloth-funnel/");
+  const Scene funnel = scene_from_frames({dir + "frames/227.ply", dir + "frames/228.ply"});
+  const Step step = load_step(funnel, 0);
+  const Topology& t = funnel.objects[0].topology;
+  const Bvh bvh = build_bvh(swept_bounds(t, step.x0[0], step.x1[0], 0).faces);
+  const SolverOptions solver;  // conservative, single precision
+  DeviceBroadPhase device(cstreams::test::device(), t, bvh, 0.0f, runtime::Registration::segmented_lock, solver);
+  device.run(step.x0[0], step.x1[0]);
+  const std::vector<Contact> contacts = device.contacts();
+
+  // The same solver over the host's float-box candidates gives the same contacts.
+  ReferenceOptions host;
+  host.bounds = BoundsPrecision::single;
+  const Candidates candidates = reference_broad_phase(step, host);
+  const CandidateBlock& block = candidates.blocks.front();
+  DeviceSolver elementary(cstreams::test::device(), solver);
+  std::vector<Query> vf, ee;
+  for (const auto& p : block.vf) vf.push_back(vertex_face_query(step, 0, 0, p));
+  for (const auto& p : block.ee) ee.push_back(edge_edge_query(step, 0, 0, p));
+  const auto vf_results = elementary.solve(ContactKind::vertex_face, vf);
+  const auto ee_results = elementary.solve(ContactKind::edge_edge, ee);
+  std::vector<Contact> expected;
+  for (std::size_t i = 0; i < vf.size(); ++i)
+    if (vf_results[i].collides()) expected.push_back(make_contact(step, 0, 0, block.vf[i], vf_results[i].toi));
+  for (std::size_t i = 0; i < ee.size(); ++i)
+    if (ee_results[i].collides()) expected.push_back(make_contact(step, 0, 0, block.ee[i], ee_results[i].toi));
+  sort_canonical(expected);
+  REQUIRE(contacts.size() == expected.size());
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    CHECK(contacts[i].same_features(expected[i]));
+    CHECK(contacts[i].toi == expected[i].toi);
+  }
+
+  // Every pair the exact ground truth marks as colliding is among them.
+  const auto truth_vf = read_bool_array(dir + "mma_bool/227vf_mma_bool.json");
+  const auto truth_ee = read_bool_array(dir + "mma_bool/227ee_mma_bool.json");
+  std::size_t positives = std::count(truth_vf.begin(), truth_vf.end(), true) + std::count(truth_ee.begin(), truth_ee.end(), true);
+  CHECK(positives == 134);
+  std::set<std::array<std::uint32_t, 4>> reported;
+  for (const auto& c : contacts) reported.insert(c.v);
+  std::ifstream vf_boxes(dir + "boxes/227vf.json"), ee_boxes(dir + "boxes/227ee.json");
+  const auto vf_ids = nlohmann::json::parse(vf_boxes).get<std::vector<std::array<std::uint64_t, 2>>>();
+  const auto ee_ids = nlohmann::json::parse(ee_boxes).get<std::vector<std::array<std::uint64_t, 2>>>();
+  const std::uint64_t nv = t.vertex_count, ne = t.edges.size();
+  std::size_t missed = 0;
+  for (std::size_t i = 0; i < vf_ids.size(); ++i)
+    if (truth_vf[i])
+      missed += !reported.count(make_contact(step, 0, 0, VertexFace{std::uint32_t(vf_ids[i][0]), std::uint32_t(vf_ids[i][1] - nv - ne)}, 0).v);
+  for (std::size_t i = 0; i < ee_ids.size(); ++i)
+    if (truth_ee[i])
+      missed += !reported.count(make_contact(step, 0, 0, EdgeEdge{std::uint32_t(ee_ids[i][0] - nv), std::uint32_t(ee_ids[i][1] - nv)}, 0).v);
+  CHECK(missed == 0);
 }
