@@ -5,8 +5,10 @@
 #include "runtime/registration.h"
 #include "bounds.h"
 
-/* Deep enough for BVTT depth-first search over trees of depth up to 40: each level
- * pushes at most three pairs and pops one. The host refuses deeper trees. */
+/* Along a depth-first path from a seed, a node against itself pushes three pairs (net
+ * +2) and descends both sides, a pair of nodes pushes two (net +1) and descends one
+ * side, so the stack holds at most 2 * depth + 1 pairs: 128 covers trees of up to 40
+ * levels, and the host refuses deeper ones. */
 #define CS_BVTT_STACK 128
 
 inline int cs_dop_overlap(__global const float* a, __global const float* b)

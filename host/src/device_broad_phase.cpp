@@ -11,7 +11,8 @@
 namespace cstreams {
 
 namespace {
-// Must match CS_BVTT_STACK in cl_kernels/ccd/broad_phase.cl: three pushes per level.
+// Depth-first BVTT search holds at most 2 * depth + 1 pairs (see broad_phase.cl);
+// CS_BVTT_STACK = 128 covers trees of up to 40 levels, about 2^39 faces.
 constexpr std::size_t max_tree_depth = 40;
 using Pair = std::array<std::uint32_t, 2>;
 }  // namespace
@@ -102,20 +103,17 @@ DeviceBroadPhase::DeviceBroadPhase(runtime::Context& context, const Topology& t,
       .arg(buffer_of(b.vertex_boxes))
       .arg(buffer_of(b.edge_boxes))
       .arg(buffer_of(b.face_boxes));
-  g.pass("cull orphan vf", {program, "cs_cull_pairs"})
-      .launch_over(s.orphan_vf)
-      .cull(s.orphan_vf, s.kept_vf)
-      .arg(buffer_of(s.orphan_vf))
-      .arg(count_of(s.orphan_vf))
-      .arg(buffer_of(b.vertex_boxes))
-      .arg(buffer_of(b.face_boxes));
-  g.pass("cull orphan ee", {program, "cs_cull_pairs"})
-      .launch_over(s.orphan_ee)
-      .cull(s.orphan_ee, s.kept_ee)
-      .arg(buffer_of(s.orphan_ee))
-      .arg(count_of(s.orphan_ee))
-      .arg(buffer_of(b.edge_boxes))
-      .arg(buffer_of(b.edge_boxes));
+  auto cull_orphans = [&](const char* name, StreamId pairs, StreamId kept, StreamId first, StreamId second) {
+    g.pass(name, {program, "cs_cull_pairs"})
+        .launch_over(pairs)
+        .cull(pairs, kept)
+        .arg(buffer_of(pairs))
+        .arg(count_of(pairs))
+        .arg(buffer_of(first))
+        .arg(buffer_of(second));
+  };
+  cull_orphans("cull orphan vf", s.orphan_vf, s.kept_vf, b.vertex_boxes, b.face_boxes);
+  cull_orphans("cull orphan ee", s.orphan_ee, s.kept_ee, b.edge_boxes, b.edge_boxes);
   if (narrow_phase) {
     const SolverOptions& o = *narrow_phase;
     if (o.precision != Precision::single)
@@ -166,13 +164,8 @@ DeviceBroadPhase::~DeviceBroadPhase() = default;
 
 Candidates DeviceBroadPhase::run(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1)
 {
-  if (x0.size() != vertex_count_ || x1.size() != vertex_count_)
-    throw InputError("positions for " + std::to_string(x0.size()) + " and " + std::to_string(x1.size()) +
-                     " vertices given to a mesh of " + std::to_string(vertex_count_));
-  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
   const Streams& s = *streams_;
-  scheduler_->upload(s.bounds.x0, f0.data(), vertex_count_);
-  scheduler_->upload(s.bounds.x1, f1.data(), vertex_count_);
+  upload_positions(*scheduler_, s.bounds, x0, x1, vertex_count_);
   scheduler_->run();
 
   CandidateBlock block{0, 0, {}, {}};

@@ -194,14 +194,20 @@ DeviceBvh::DeviceBvh(runtime::Context& context, const Topology& t, const Bvh& bv
 
 DeviceBvh::~DeviceBvh() = default;
 
+void upload_positions(runtime::Scheduler& scheduler, const BoundsStreams& s, const std::vector<Vec3>& x0,
+                      const std::vector<Vec3>& x1, std::size_t vertex_count)
+{
+  if (x0.size() != vertex_count || x1.size() != vertex_count)
+    throw InputError("positions for " + std::to_string(x0.size()) + " and " + std::to_string(x1.size()) +
+                     " vertices given to a mesh of " + std::to_string(vertex_count));
+  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
+  scheduler.upload(s.x0, f0.data(), vertex_count);
+  scheduler.upload(s.x1, f1.data(), vertex_count);
+}
+
 void DeviceBvh::refit(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1)
 {
-  if (x0.size() != vertex_count_ || x1.size() != vertex_count_)
-    throw InputError("positions for " + std::to_string(x0.size()) + " and " + std::to_string(x1.size()) +
-                     " vertices given to a mesh of " + std::to_string(vertex_count_));
-  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
-  scheduler_->upload(streams_.x0, f0.data(), vertex_count_);
-  scheduler_->upload(streams_.x1, f1.data(), vertex_count_);
+  upload_positions(*scheduler_, streams_, x0, x1, vertex_count_);
   scheduler_->run();
 }
 

@@ -45,6 +45,9 @@ BoundsStreams add_bounds_passes(runtime::StreamGraph& graph, const Topology& top
 void upload_topology(runtime::Scheduler& scheduler, const BoundsStreams& s, const Topology& topology, const Bvh& bvh);
 // Rounds positions to float (an InputError for a non-finite or out-of-range one).
 std::vector<float> to_float_positions(const std::vector<Vec3>& x);
+// Checks a step's positions against the mesh and uploads them, rounded to float.
+void upload_positions(runtime::Scheduler& scheduler, const BoundsStreams& s, const std::vector<Vec3>& x0,
+                      const std::vector<Vec3>& x1, std::size_t vertex_count);
 std::vector<Kdop18f> unpack_dops(const std::vector<float>& flat);
 
 // One mesh's swept bounds and BVH refit on a device, as a stream graph: three bounds
