@@ -4,9 +4,7 @@
 #include <cstreams/runtime/context.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
-#include <limits>
 
 namespace cstreams {
 
@@ -53,7 +51,7 @@ struct DeviceBroadPhase::Streams {
 
 DeviceBroadPhase::DeviceBroadPhase(runtime::Context& context, const Topology& t, const Bvh& bvh, float separation,
                                    runtime::Registration registration, std::optional<SolverOptions> narrow_phase)
-    : streams_(std::make_unique<Streams>()), vertex_count_(t.vertex_count), topology_(t),
+    : streams_(std::make_unique<Streams>()), topology_(t),
       narrow_phase_(narrow_phase.has_value())
 {
   using namespace runtime;
@@ -118,11 +116,9 @@ DeviceBroadPhase::DeviceBroadPhase(runtime::Context& context, const Topology& t,
     const SolverOptions& o = *narrow_phase;
     if (o.precision != Precision::single)
       throw Error("the device pipeline runs its elementary tests in single precision only, for now");
-    const std::string options = "-DCS_REAL_DOUBLE=0 -DCS_SOLVER=" + std::to_string(o.solver == Solver::conservative) +
-                                " -DCS_STACK_SIZE=96 -cl-denorms-are-zero";
-    const float up = std::numeric_limits<float>::infinity();
-    const float tolerance = std::nextafter(float(o.tolerance), up);
-    const float min_separation = o.min_separation > 0 ? std::nextafter(float(o.min_separation), up) : 0.0f;
+    const std::string options = solver_build_options(o);
+    const float tolerance = float_above(o.tolerance);
+    const float min_separation = float_above(o.min_separation);
     const std::pair<StreamId, ContactKind> inputs[] = {{s.vf, ContactKind::vertex_face},
                                                        {s.kept_vf, ContactKind::vertex_face},
                                                        {s.ee, ContactKind::edge_edge},
@@ -165,7 +161,7 @@ DeviceBroadPhase::~DeviceBroadPhase() = default;
 Candidates DeviceBroadPhase::run(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1)
 {
   const Streams& s = *streams_;
-  upload_positions(*scheduler_, s.bounds, x0, x1, vertex_count_);
+  upload_positions(*scheduler_, s.bounds, x0, x1, topology_.vertex_count);
   scheduler_->run();
 
   CandidateBlock block{0, 0, {}, {}};

@@ -30,7 +30,9 @@ namespace {
 // allows along the current path; running out still answers conservatively.
 int stack_size(Precision p) { return p == Precision::single ? 96 : 192; }
 
-std::string build_options(const SolverOptions& o)
+}  // namespace
+
+std::string solver_build_options(const SolverOptions& o)
 {
   std::string options = "-DCS_REAL_DOUBLE=" + std::to_string(o.precision == Precision::double_) +
                         " -DCS_SOLVER=" + std::to_string(o.solver == Solver::conservative) +
@@ -40,6 +42,13 @@ std::string build_options(const SolverOptions& o)
   if (o.precision == Precision::single) options += " -cl-denorms-are-zero";
   return options;
 }
+
+float float_above(double x)
+{
+  return x > 0 ? std::nextafter(float(x), std::numeric_limits<float>::infinity()) : 0.0f;
+}
+
+namespace {
 
 template <class Real> void pack(const std::vector<Query>& queries, std::vector<Real>& out)
 {
@@ -60,7 +69,7 @@ DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& optio
   if (!(options.tolerance > 0)) throw InputError("solver tolerance must be positive");
   if (!(options.min_separation >= 0)) throw InputError("minimum separation must not be negative");
   context.programs().add_sources(ccd_kernel_sources());
-  kernel_ = context.programs().kernel("ccd/narrow_phase.cl", "cs_narrow_phase", build_options(options));
+  kernel_ = context.programs().kernel("ccd/narrow_phase.cl", "cs_narrow_phase", solver_build_options(options));
 }
 
 std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::vector<Query>& queries,
@@ -102,11 +111,8 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
     kernel_.set_arg(index++, options_.tolerance);
     kernel_.set_arg(index++, options_.min_separation);
   } else {
-    // One float step up from the nearest float, so the float solver is never stricter
-    // than asked (a separation of 0 stays 0).
-    const float inf = std::numeric_limits<float>::infinity();
-    kernel_.set_arg(index++, std::nextafter(float(options_.tolerance), inf));
-    kernel_.set_arg(index++, options_.min_separation > 0 ? std::nextafter(float(options_.min_separation), inf) : 0.0f);
+    kernel_.set_arg(index++, float_above(options_.tolerance));
+    kernel_.set_arg(index++, float_above(options_.min_separation));
   }
   kernel_.set_arg(index++, cl_uint(options_.max_iterations));
   kernel_.set_arg(index++, cl_uint(options_.filter));

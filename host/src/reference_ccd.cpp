@@ -1,10 +1,9 @@
+#include <cstreams/narrow_phase.hpp>
 #include <cstreams/reference_ccd.hpp>
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
 #include <mutex>
 
 namespace cstreams {
@@ -181,8 +180,7 @@ Candidates reference_broad_phase(const Step& step, const ReferenceOptions& optio
     return candidates(step, bounds, trees, options.broad_phase);
   }
   // The float separation is rounded up, so the float boxes stay conservative.
-  const float float_separation =
-      separation > 0 ? std::nextafter(float(separation), std::numeric_limits<float>::infinity()) : 0.0f;
+  const float float_separation = float_above(separation);
   std::vector<Bounds<Kdop18f>> bounds(n);
   for (std::size_t o = 0; o < n; ++o) {
     FloatBounds f = float_bounds(scene.objects[o].topology, trees[o], step.x0[o], step.x1[o], float_separation);

@@ -17,7 +17,6 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <limits>
 
 using namespace cstreams;
 
@@ -101,8 +100,7 @@ void check_broad_phase(const Scene& scene, std::size_t frame, double separation)
   REQUIRE(expected.blocks.front().object_a == 0);
   REQUIRE(expected.blocks.front().object_b == 0);
   const Bvh bvh = build_bvh(swept_bounds(t, step.x0[0], step.x1[0], separation).faces);
-  const float device_separation =
-      separation > 0 ? std::nextafter(float(separation), std::numeric_limits<float>::infinity()) : 0.0f;
+  const float device_separation = float_above(separation);
   for (auto registration : {runtime::Registration::segmented_lock, runtime::Registration::lock_free,
                             runtime::Registration::global_atomic}) {
     INFO(runtime::to_string(registration) << ", separation " << separation);

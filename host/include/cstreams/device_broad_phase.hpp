@@ -34,7 +34,6 @@ private:
   struct Streams;
   std::unique_ptr<Streams> streams_;
   std::unique_ptr<runtime::Scheduler> scheduler_;
-  std::size_t vertex_count_;
   const Topology& topology_;
   bool narrow_phase_;
 };

@@ -74,6 +74,14 @@ private:
   runtime::Buffer queries_, status_, toi_;
 };
 
+// Build options of the elementary-test kernels for these settings (precision, solver,
+// search stack, subnormal flushing in single precision).
+std::string solver_build_options(const SolverOptions& options);
+
+// One float step above the float nearest to x (0 and below give 0): how a double
+// tolerance or separation is handed to float kernels, never stricter than asked.
+float float_above(double x);
+
 // The OpenCL sources of the collision kernels (cl_kernels/ccd), for a program registry.
 const runtime::SourceSet& ccd_kernel_sources();
 
