@@ -31,14 +31,14 @@ __kernel void cs_primitive_bounds(__global const float* x0, __global const float
   cs_swept_dop(x0, x1, vertices, (int)corners, separation, boxes + (size_t)CS_DOP_FLOATS * i);
 }
 
-/* nodes: (left child or -1, face or -1, parent) per node. */
-__kernel void cs_refit_level(__global const int* nodes, __global const float* face_boxes, const uint first,
+/* nodes: (first child or -1, face or -1, parent, depth) per node. */
+__kernel void cs_refit_level(__global const int4* nodes, __global const float* face_boxes, const uint first,
                              const uint count, __global float* node_boxes)
 {
   const uint i = get_global_id(0);
   if (i >= count) return;
   const uint node = first + i;
-  const int left = nodes[3 * node], face = nodes[3 * node + 1];
+  const int left = nodes[node].x, face = nodes[node].y;
   __global float* out = node_boxes + (size_t)CS_DOP_FLOATS * node;
   if (left < 0) {
     for (int k = 0; k < CS_DOP_FLOATS; ++k) out[k] = face_boxes[(size_t)CS_DOP_FLOATS * face + k];

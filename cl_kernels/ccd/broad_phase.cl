@@ -1,15 +1,41 @@
-/* Broad phase of one self-colliding mesh: BVTT traversal from a seed front of node
- * pairs to non-adjacent triangle pairs, their decomposition into vertex-face and
- * edge-edge pairs by feature ownership, and the cull of feature pairs (and of the
- * orphan pairs) by their swept bounds. Boxes are 18 floats (bounds.h). */
+/* Broad phase of a scene: BVTT front update over a forest of BVHs (one per object) to
+ * non-adjacent triangle pairs, their decomposition into vertex-face and edge-edge
+ * pairs by feature ownership, and the cull of feature pairs (and of the orphan pairs)
+ * by their swept bounds. Boxes are 18 floats (bounds.h). Ids are global: every
+ * object's vertices, edges, faces and nodes lie in one range of the scene's streams.
+ *
+ * nodes: int4 (first child or -1, face or -1, parent or -1, depth in its own tree).
+ * A BVTT node is a pair of tree nodes (i, j); i == j is a node against itself. A pair
+ * of distinct nodes descends the shallower one (the first on a tie, never a leaf), so
+ * the parent of (i, j) is (parent(i), j) when i is deeper, else (i, parent(j)); a
+ * node against itself has children (l, l + 1), (l, l), (l + 1, l + 1), the first being
+ * its first child. The level of (i, j) is depth(i) + depth(j), which grows along
+ * every BVTT edge. */
 #include "runtime/registration.h"
 #include "bounds.h"
 
-/* Along a depth-first path from a seed, a node against itself pushes three pairs (net
- * +2) and descends both sides, a pair of nodes pushes two (net +1) and descends one
- * side, so the stack holds at most 2 * depth + 1 pairs: 128 covers trees of up to 40
- * levels, and the host refuses deeper ones. */
+/* Along a depth-first path, a node against itself pushes three pairs (net +2) and
+ * descends both sides, a pair of nodes pushes two (net +1) and descends one side, so
+ * the stack holds at most 2 * depth + 1 pairs: 128 covers trees of up to 40 levels,
+ * and the host refuses deeper ones. */
 #define CS_BVTT_STACK 128
+
+/* Built with CS_KEEP_FRONT=1 the update emits the next front (front modes exact and
+ * deferred); with 0 the front is a fixed set of seeds, searched every step. */
+#ifndef CS_KEEP_FRONT
+#define CS_KEEP_FRONT 0
+#endif
+#if CS_KEEP_FRONT
+#define CS_FRONT_PARAMS CS_EMITTER_PARAMS(int2, next_front),
+#define CS_FRONT_BEGIN CS_EMITTER_BEGIN(next_front)
+#define CS_FRONT_EMIT(p) CS_EMIT(next_front, p)
+#define CS_FRONT_END CS_EMITTER_END(next_front)
+#else
+#define CS_FRONT_PARAMS
+#define CS_FRONT_BEGIN (void)0
+#define CS_FRONT_EMIT(p) (void)0
+#define CS_FRONT_END (void)0
+#endif
 
 inline int cs_dop_overlap(__global const float* a, __global const float* b)
 {
@@ -26,45 +52,112 @@ inline int cs_faces_adjacent(__global const uint* faces, const uint f, const uin
   return 0;
 }
 
-/* nodes: (left or -1, face or -1, parent); seeds: node pairs (i, j), i == j meaning the
- * node against itself. */
-__kernel void cs_traverse(__global const int2* seeds, const uint n, __global const int* nodes,
-                          __global const float* node_boxes, __global const uint* faces,
-                          CS_EMITTER_PARAMS(uint2, pairs))
+inline int cs_pair_overlaps(__global const float* boxes, const int2 p)
 {
+  return p.x == p.y || cs_dop_overlap(boxes + CS_DOP_FLOATS * p.x, boxes + CS_DOP_FLOATS * p.y);
+}
+
+/* Whether a pair of distinct nodes descends its first node. */
+inline int cs_descends_first(const int4 a, const int4 b) { return a.x >= 0 && (b.x < 0 || a.w <= b.w); }
+
+/* The BVTT parent of p, or (-1, -1) for a pair of two roots (a seed of the front). */
+inline int2 cs_bvtt_parent(__global const int4* nodes, const int2 p)
+{
+  const int4 a = nodes[p.x], b = nodes[p.y];
+  if (p.x == p.y) return a.z < 0 ? (int2)(-1, -1) : (int2)(a.z, a.z);
+  if (a.z >= 0 && a.z == b.z) return (int2)(a.z, a.z);
+  if (a.z < 0 && b.z < 0) return (int2)(-1, -1);
+  return a.w > b.w ? (int2)(a.z, p.y) : (int2)(p.x, b.z);
+}
+
+inline int cs_is_first_child(__global const int4* nodes, const int2 parent, const int2 child)
+{
+  const int4 a = nodes[parent.x], b = nodes[parent.y];
+  if (parent.x == parent.y) return child.x == a.x && child.y == a.x + 1;
+  return cs_descends_first(a, b) ? child.x == a.x : child.y == b.x;
+}
+
+inline uint cs_level(__global const int4* nodes, const int2 p) { return (uint)(nodes[p.x].w + nodes[p.y].w); }
+
+/* One work-item per pair of the current front (a cut of the BVTT: every pair of
+ * leaves lies under exactly one of its pairs). With CS_KEEP_FRONT, emits the next front:
+ *  - a pair deeper than `cap` stands for its ancestor at level <= cap;
+ *  - a pair whose boxes are apart climbs to its highest ancestor whose boxes are apart;
+ *    of all the front pairs under that ancestor, the one on its chain of first
+ *    children emits it (exactly one is, since the front is a cut);
+ *  - a pair whose boxes overlap is searched depth first: the search emits the pairs
+ *    where it stops (boxes apart, or two leaves) and the overlapping pairs at the cap,
+ *    below which it goes on without emitting.
+ * So the next front is again a cut, no deeper than `cap` (0xffffffff: the exact
+ * front). Every search emits the pairs of overlapping leaves whose faces share no vertex. */
+__kernel void cs_front_update(__global const int2* front, const uint n, __global const int4* nodes,
+                              __global const float* node_boxes, __global const uint* faces, const uint cap,
+                              CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
+{
+  CS_FRONT_BEGIN;
   CS_EMITTER_BEGIN(pairs);
   const uint s = get_global_id(0);
   if (s < n) {
-    int2 stack[CS_BVTT_STACK];
-    int top = 0;
-    stack[top++] = seeds[s];
-    while (top > 0) {
-      const int2 p = stack[--top];
-      const int li = nodes[3 * p.x], lj = nodes[3 * p.y];
-      if (p.x == p.y) {
-        if (li < 0) continue;
-        stack[top++] = (int2)(li, li);
-        stack[top++] = (int2)(li + 1, li + 1);
-        stack[top++] = (int2)(li, li + 1);
-        continue;
+    int2 p = front[s];
+    int live = 1;
+    while (live && cs_level(nodes, p) > cap) {
+      const int2 q = cs_bvtt_parent(nodes, p);
+      live = cs_is_first_child(nodes, q, p);
+      p = q;
+    }
+    if (live && !cs_pair_overlaps(node_boxes, p)) {
+      while (CS_KEEP_FRONT) {
+        const int2 q = cs_bvtt_parent(nodes, p);
+        if (q.x < 0 || cs_pair_overlaps(node_boxes, q)) {
+          CS_FRONT_EMIT(p);
+          break;
+        }
+        if (!cs_is_first_child(nodes, q, p)) break;
+        p = q;
       }
-      if (!cs_dop_overlap(node_boxes + CS_DOP_FLOATS * p.x, node_boxes + CS_DOP_FLOATS * p.y)) continue;
-      if (li < 0 && lj < 0) {
-        const uint f = (uint)nodes[3 * p.x + 1], g = (uint)nodes[3 * p.y + 1];
-        if (!cs_faces_adjacent(faces, f, g)) CS_EMIT(pairs, (uint2)(f, g));
-      } else if (lj < 0 || (li >= 0 && p.x <= p.y)) {
-        stack[top++] = (int2)(li, p.y);
-        stack[top++] = (int2)(li + 1, p.y);
-      } else {
-        stack[top++] = (int2)(p.x, lj);
-        stack[top++] = (int2)(p.x, lj + 1);
+    } else if (live) {
+      int2 stack[CS_BVTT_STACK];
+      int top = 0;
+      stack[top++] = p;
+      while (top > 0) {
+        const int2 q = stack[--top];
+        const int4 a = nodes[q.x], b = nodes[q.y];
+        const uint level = (uint)(a.w + b.w);
+        const int in_front = CS_KEEP_FRONT && level <= cap;
+        if (q.x == q.y) {
+          if (a.x < 0) continue;
+          if (in_front && cap - level < 2) CS_FRONT_EMIT(q);
+          stack[top++] = (int2)(a.x, a.x);
+          stack[top++] = (int2)(a.x + 1, a.x + 1);
+          stack[top++] = (int2)(a.x, a.x + 1);
+          continue;
+        }
+        if (!cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
+          if (in_front) CS_FRONT_EMIT(q);
+          continue;
+        }
+        if (a.x < 0 && b.x < 0) {
+          if (!cs_faces_adjacent(faces, (uint)a.y, (uint)b.y)) CS_EMIT(pairs, (uint2)((uint)a.y, (uint)b.y));
+          if (in_front) CS_FRONT_EMIT(q);
+          continue;
+        }
+        if (in_front && level == cap) CS_FRONT_EMIT(q);
+        if (cs_descends_first(a, b)) {
+          stack[top++] = (int2)(a.x, q.y);
+          stack[top++] = (int2)(a.x + 1, q.y);
+        } else {
+          stack[top++] = (int2)(q.x, b.x);
+          stack[top++] = (int2)(q.x, b.x + 1);
+        }
       }
     }
   }
+  CS_FRONT_END;
   CS_EMITTER_END(pairs);
 }
 
-/* owned: bits 0-2 face vertex k owned by the face, bits 3-5 face edge k. */
+/* owned: bits 0-2 face vertex k owned by the face, bits 3-5 face edge k. Edge pairs
+ * come out as (smaller id, larger id). */
 __kernel void cs_decompose(__global const uint2* pairs, const uint n, __global const uint* faces,
                            __global const uint* face_edges, __global const uint* owned,
                            __global const float* vertex_boxes, __global const float* edge_boxes,

@@ -9,9 +9,16 @@
 #define CS_SOLVER_CUBIC 0
 #define CS_SOLVER_CONSERVATIVE 1
 
-/* The same tests over candidate pairs of one mesh whose positions are on the device:
+/* The same tests over candidate pairs whose positions are on the device:
  * vertex_face selects (vertex, face) pairs, else (edge, edge) pairs. Colliding pairs
- * are emitted as (feature a, feature b, status, time of impact as float bits). */
+ * are emitted as (feature a, feature b, time of impact): the time as the bits of a
+ * double (low word first), or of a float and a zero word in single precision. */
+#if CS_REAL_DOUBLE
+inline uint2 cs_time_bits(const double t) { return as_uint2(t); }
+#else
+inline uint2 cs_time_bits(const float t) { return (uint2)(as_uint(t), 0u); }
+#endif
+
 inline void cs_gather(__global const real* x0, __global const real* x1, const uint* v, real out[24])
 {
   for (int i = 0; i < 4; ++i)
@@ -59,10 +66,7 @@ __kernel void cs_narrow_phase_pairs(__global const uint2* pairs, const uint n, c
       s = cs_conservative(&query, (int)vertex_face, tolerance, separation, max_iterations, &t);
 #endif
     }
-    /* The time goes out as a float rounded down, so it stays a lower bound. */
-    float tf = (float)t;
-    if ((real)tf > t) tf = nextafter(tf, -INFINITY);
-    if (s == CS_COLLIDES || s == CS_LIMIT) CS_EMIT(contacts, (uint4)(p.x, p.y, s, as_uint(tf)));
+    if (s == CS_COLLIDES || s == CS_LIMIT) CS_EMIT(contacts, (uint4)(p.x, p.y, cs_time_bits(t)));
   }
   CS_EMITTER_END(contacts);
 }

@@ -59,12 +59,18 @@ std::size_t Scene::frame_count() const
   return count;
 }
 
+bool objects_may_collide(std::uint32_t a, std::uint32_t b, ObjectKind kind_a, bool self_collision_a, ObjectKind kind_b,
+                         const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ignored)
+{
+  if (a == b) return self_collision_a && kind_a == ObjectKind::deformable;
+  if (kind_a == ObjectKind::static_ && kind_b == ObjectKind::static_) return false;
+  const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+  return std::find(ignored.begin(), ignored.end(), key) == ignored.end();
+}
+
 bool Scene::may_collide(std::uint32_t a, std::uint32_t b) const
 {
-  if (a == b) return objects[a].self_collision && objects[a].kind == ObjectKind::deformable;
-  if (objects[a].kind == ObjectKind::static_ && objects[b].kind == ObjectKind::static_) return false;
-  const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-  return std::find(ignored_pairs.begin(), ignored_pairs.end(), key) == ignored_pairs.end();
+  return objects_may_collide(a, b, objects[a].kind, objects[a].self_collision, objects[b].kind, ignored_pairs);
 }
 
 std::uint32_t Scene::object_index(const std::string& object_name) const

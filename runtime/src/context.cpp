@@ -62,6 +62,17 @@ void Context::write(const Buffer& buffer, const void* data, std::size_t bytes, s
   if (timeline) timeline->record("upload", out_event(timeline, event));
 }
 
+void Context::copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset,
+                   std::size_t destination_offset, Timeline* timeline)
+{
+  if (bytes == 0) return;
+  cl_event event = nullptr;
+  check(clEnqueueCopyBuffer(queue_.get(), source.get(), destination.get(), source_offset, destination_offset, bytes, 0,
+                            nullptr, timeline ? &event : nullptr),
+        "clEnqueueCopyBuffer", "copying " + std::to_string(bytes) + " bytes");
+  if (timeline) timeline->record("copy", out_event(timeline, event));
+}
+
 void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset, Timeline* timeline)
 {
   if (bytes == 0) return;

@@ -99,4 +99,11 @@ const char* cl_status_name(cl_int status) noexcept
   }
 }
 
+StreamLimitExceeded::StreamLimitExceeded(const std::string& stream, std::size_t needed, std::size_t limit)
+    : Error("stream " + stream + " needs " + std::to_string(needed) + " items, over its limit of " +
+            std::to_string(limit)),
+      needed_(needed)
+{
+}
+
 }  // namespace cstreams::runtime

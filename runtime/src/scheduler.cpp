@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 
 namespace cstreams::runtime {
@@ -17,6 +18,7 @@ struct StreamState {
   Buffer buffer;
   std::size_t count = 0;
   std::size_t capacity = 0;
+  std::size_t limit = SIZE_MAX;
   bool known = true;
   std::uint32_t slot = no_slot;  // count slot of a variable stream
 };
@@ -78,6 +80,7 @@ struct Scheduler::State {
 
   void allocate(StreamId s, std::size_t items)
   {
+    if (items > state(s).limit) throw StreamLimitExceeded(spec(s).name, items, state(s).limit);
     auto& st = state(s);
     st.buffer = Buffer(context, items * spec(s).element_bytes, spec(s).name.c_str());
     st.capacity = items;
@@ -191,14 +194,14 @@ struct Scheduler::State {
             r = Redo::full;
           }
           if (host_counters[dst.slot] > dst.capacity) {
-            allocate(e.stream, grown(host_counters[dst.slot]));
+            allocate(e.stream, std::min(grown(host_counters[dst.slot]), std::max<std::size_t>(dst.limit, host_counters[dst.slot])));
             r = std::max(r, atomic ? Redo::full : Redo::pack);
           }
         }
         if (p->spec->culls()) {
           auto& dst = state(p->spec->cull_target);
           if (host_counters[dst.slot] > dst.capacity) {
-            allocate(p->spec->cull_target, grown(host_counters[dst.slot]));
+            allocate(p->spec->cull_target, std::min(grown(host_counters[dst.slot]), std::max<std::size_t>(dst.limit, host_counters[dst.slot])));
             r = std::max(r, Redo::pack);
           }
         }
@@ -337,6 +340,29 @@ void Scheduler::download(StreamId stream, void* items, std::size_t count) const
   s.context.read(st.buffer, items, count * s.spec(stream).element_bytes);
 }
 
+void Scheduler::write(StreamId stream, std::size_t first, const void* items, std::size_t count)
+{
+  auto& s = *state_;
+  const auto& spec = s.spec(stream);
+  if (spec.variable || first + count > s.state(stream).count)
+    throw Error("cannot write items [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                ") of stream " + spec.name + (spec.variable ? ", which is variable-length" : ", which holds " +
+                std::to_string(s.state(stream).count)));
+  s.context.write(s.state(stream).buffer, items, count * spec.element_bytes, first * spec.element_bytes);
+}
+
+void Scheduler::copy(StreamId source, std::size_t source_first, StreamId destination, std::size_t destination_first,
+                     std::size_t count)
+{
+  auto& s = *state_;
+  const auto &from = s.spec(source), &to = s.spec(destination);
+  if (from.element_bytes != to.element_bytes || source_first + count > s.state(source).count ||
+      destination_first + count > s.state(destination).count || to.variable)
+    throw Error("cannot copy " + std::to_string(count) + " items from stream " + from.name + " to " + to.name);
+  s.context.copy(s.state(source).buffer, s.state(destination).buffer, count * from.element_bytes,
+                 source_first * from.element_bytes, destination_first * to.element_bytes);
+}
+
 std::size_t Scheduler::count(StreamId stream) const { return state_->state(stream).count; }
 std::size_t Scheduler::capacity(StreamId stream) const { return state_->state(stream).capacity; }
 
@@ -346,6 +372,14 @@ void Scheduler::set_capacity(StreamId stream, std::size_t items)
   if (!s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is fixed-length; resize it instead");
   s.allocate(stream, items);
   s.state(stream).count = std::min(s.state(stream).count, items);
+}
+
+void Scheduler::set_limit(StreamId stream, std::size_t items)
+{
+  auto& s = *state_;
+  if (!s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is fixed-length and never grows");
+  s.state(stream).limit = items;
+  if (s.state(stream).capacity > items) set_capacity(stream, items);
 }
 
 void Scheduler::resize(StreamId stream, std::size_t items)

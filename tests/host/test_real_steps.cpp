@@ -1,5 +1,8 @@
 // The host reference against the exact ground truth of the five real simulation steps.
 #include "../support/shared_data.hpp"
+#include "../support/test_device.hpp"
+
+#include <cstreams/detector.hpp>
 
 #include <cstreams/query_io.hpp>
 #include <cstreams/reference_ccd.hpp>
@@ -70,14 +73,10 @@ bool file_exists(const std::string& path)
   return stat(path.c_str(), &st) == 0;
 }
 
-void check_recall(const RealStep& s)
+// Every pair the ground truth marks true is among `contacts`.
+void check_recall(const RealStep& s, const Step& step, const std::vector<Contact>& contacts)
 {
-  INFO("scene " << s.scene);
-  const Scene scene = load_real(s);
-  const Step step = load_step(scene, 0);
   const GroundTruth truth = ground_truth(s, step);
-  const std::vector<Contact> contacts = reference_ccd(step);
-
   auto key = [](const Contact& c) { return std::make_tuple(c.kind, c.v); };
   std::set<decltype(key(contacts[0]))> reported;
   for (const auto& c : contacts) reported.insert(key(c));
@@ -91,6 +90,38 @@ void check_recall(const RealStep& s)
       }
   CHECK(truth.vf.size() + truth.ee.size() > 0);
   CHECK(missed == 0);
+}
+
+void check_recall(const RealStep& s)
+{
+  INFO("scene " << s.scene);
+  const Scene scene = load_real(s);
+  const Step step = load_step(scene, 0);
+  check_recall(s, step, reference_ccd(step));
+}
+
+// The device pipeline with the default (conservative, single precision) solver, in
+// front modes none and exact; both must report the same contacts.
+void check_device_recall(const RealStep& s)
+{
+  INFO("scene " << s.scene);
+  const Scene scene = load_real(s);
+  const Step step = load_step(scene, 0);
+  std::vector<Contact> first;
+  for (FrontMode front : {FrontMode::none, FrontMode::exact}) {
+    DetectorOptions options;
+    options.front = front;
+    Detector detector(cstreams::test::device(), describe(scene, 0), options);
+    detector.set_positions(0, step.x1[0]);
+    detector.detect();
+    check_recall(s, step, detector.contacts());
+    if (front == FrontMode::none) {
+      first = detector.contacts();
+      continue;
+    }
+    REQUIRE(detector.contacts().size() == first.size());
+    for (std::size_t i = 0; i < first.size(); ++i) CHECK(detector.contacts()[i].same_features(first[i]));
+  }
 }
 
 }  // namespace
@@ -146,6 +177,23 @@ TEST_CASE("the host reference reports every true pair of n-body and cloth-ball",
 {
   check_recall(cstreams::test::real_steps[3]);
   check_recall(cstreams::test::real_steps[4]);
+}
+
+TEST_CASE("the device pipeline reports every true pair of cloth-funnel", "[detector][quick]")
+{
+  check_device_recall(cstreams::test::real_steps[0]);
+}
+
+TEST_CASE("the device pipeline reports every true pair of rod-twist and armadillo-rollers", "[detector][slow]")
+{
+  check_device_recall(cstreams::test::real_steps[1]);
+  check_device_recall(cstreams::test::real_steps[2]);
+}
+
+TEST_CASE("the device pipeline reports every true pair of n-body and cloth-ball", "[detector][slow]")
+{
+  check_device_recall(cstreams::test::real_steps[3]);
+  check_device_recall(cstreams::test::real_steps[4]);
 }
 
 TEST_CASE("the host reference misses none of the hand-made degenerate queries", "[host][reference][slow]")

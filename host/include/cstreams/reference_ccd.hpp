@@ -1,7 +1,7 @@
 #pragma once
 #include <cstreams/bvh.hpp>
 #include <cstreams/contacts.hpp>
-#include <cstreams/device_bvh.hpp>
+#include <cstreams/float_bounds.hpp>
 #include <cstreams/reference_solver.hpp>
 #include <cstreams/scene.hpp>
 #include <cstreams/topology.hpp>

@@ -23,6 +23,12 @@ enum class ObjectKind {
 const char* to_string(ObjectKind kind) noexcept;
 ObjectKind parse_object_kind(const std::string& text);
 
+// Whether objects a and b (a == b: self-collision) need collision detection: only a
+// deformable object with self-collision collides with itself, two static objects
+// never collide, and a pair in `ignored` (a < b) is masked off.
+bool objects_may_collide(std::uint32_t a, std::uint32_t b, ObjectKind kind_a, bool self_collision_a, ObjectKind kind_b,
+                         const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ignored);
+
 // One object of a scene: a triangle mesh, how it moves, and where its frames are.
 struct SceneObject {
   std::string name;

@@ -43,6 +43,8 @@ public:
              Timeline* timeline = nullptr);
   void read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
             Timeline* timeline = nullptr);
+  void copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset = 0,
+            std::size_t destination_offset = 0, Timeline* timeline = nullptr);
   void fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,
                 Timeline* timeline = nullptr);
   void finish();

@@ -43,6 +43,17 @@ public:
   using Error::Error;
 };
 
+// A variable stream needed more items than the limit set on it (Scheduler::set_limit);
+// the run stopped, leaving the streams it reads as they were.
+class StreamLimitExceeded : public Error {
+public:
+  StreamLimitExceeded(const std::string& stream, std::size_t needed, std::size_t limit);
+  std::size_t needed() const noexcept { return needed_; }
+
+private:
+  std::size_t needed_;
+};
+
 const char* cl_status_name(cl_int status) noexcept;
 
 // Throws ClError when status is not CL_SUCCESS. `context` says what was being done.

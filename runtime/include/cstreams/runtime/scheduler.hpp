@@ -69,10 +69,20 @@ public:
     return items;
   }
 
+  // Fixed streams only: items [first, first + count) without resizing, and a copy of
+  // items between two streams of one element size (queued on the device).
+  void write(StreamId stream, std::size_t first, const void* items, std::size_t count);
+  void copy(StreamId source, std::size_t source_first, StreamId destination, std::size_t destination_first,
+            std::size_t count);
+
   std::size_t count(StreamId stream) const;
   std::size_t capacity(StreamId stream) const;
   // Sets a variable stream's capacity, smaller ones included (tests force tiny ones).
   void set_capacity(StreamId stream, std::size_t items);
+  // Caps how far a variable stream may grow: a run that needs more stops with
+  // StreamLimitExceeded instead of growing it (a caller that can make do with less,
+  // such as a front kept at coarser levels, changes its parameters and runs again).
+  void set_limit(StreamId stream, std::size_t items);
   // Sets a fixed stream's item count; contents are undefined until written.
   void resize(StreamId stream, std::size_t items);
   // Exchanges two streams' buffers and counts (ping-pong between runs).

@@ -1,0 +1,36 @@
+/* The earliest time of impact per object, without reading back the contacts: times
+ * are floats rounded down (so still lower bounds) and, being non-negative, order as
+ * their bits do, so an atomic minimum on the bits is a minimum on the times. */
+#pragma OPENCL FP_CONTRACT OFF
+#if CS_REAL_DOUBLE
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+
+__kernel void cs_clear_earliest(const uint objects, __global uint* earliest)
+{
+  const uint i = get_global_id(0);
+  if (i < objects) earliest[i] = as_uint(1.0f);
+}
+
+/* contacts: (feature a, feature b, time bits) as narrow_phase_pairs.cl emits them,
+ * built with the same CS_REAL_DOUBLE; vertex_face: a is a vertex and b a face, else
+ * both are edges. */
+__kernel void cs_earliest_toi(__global const uint4* contacts, const uint n, const uint vertex_face,
+                              __global const uint* faces, __global const uint* edges,
+                              __global const uint* vertex_object, __global uint* earliest)
+{
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  const uint4 c = contacts[i];
+#if CS_REAL_DOUBLE
+  const double d = as_double(c.zw);
+  float t = (float)d;
+  if ((double)t > d) t = nextafter(t, 0.0f);
+#else
+  const float t = as_float(c.z);
+#endif
+  const uint a = vertex_object[vertex_face ? c.x : edges[2 * c.x]];
+  const uint b = vertex_object[vertex_face ? faces[3 * c.y] : edges[2 * c.y]];
+  atomic_min(&earliest[a], as_uint(t));
+  atomic_min(&earliest[b], as_uint(t));
+}

@@ -1,0 +1,134 @@
+#pragma once
+// The public API: continuous collision detection of a scene of triangle meshes on an
+// OpenCL device, step after step.
+//
+//   cstreams::runtime::Context device("nvidia");          // or "pocl", "gpu", "0:1", ...
+//   cstreams::SceneDescription scene;
+//   const auto cloth = scene.add({"cloth", cloth_faces, cloth_rest});
+//   scene.add({"ball", ball_faces, ball_rest, cstreams::ObjectKind::static_});
+//   cstreams::Detector detector(device, scene, {});       // named defaults: DetectorOptions
+//   for (...) {
+//     detector.set_positions(cloth, next_cloth_positions);
+//     detector.detect();                                  // the step from the last positions
+//     for (const cstreams::Contact& c : detector.contacts()) ...
+//   }
+#include <cstreams/contacts.hpp>
+#include <cstreams/narrow_phase.hpp>
+#include <cstreams/reference_ccd.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+#include <cstreams/scene.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace cstreams {
+
+namespace runtime {
+class Context;
+}
+
+// How the BVTT front (where last step's search of the bounding volume test tree
+// stopped) carries over to the next step. Every mode reports the same contacts.
+enum class FrontMode {
+  none,     // search from the roots every step; no front kept
+  exact,    // the paper's front tracking: the next search starts from the last front
+  deferred  // the front kept at ancestors, as deep as the memory budget allows
+};
+const char* to_string(FrontMode mode) noexcept;
+FrontMode parse_front_mode(const std::string& text);
+
+// One object as the detector sees it: a triangle mesh and where it starts.
+struct ObjectDescription {
+  std::string name;
+  std::vector<Face> faces;
+  std::vector<Vec3> positions;  // a static object stays here for good
+  ObjectKind kind = ObjectKind::deformable;
+  bool self_collision = true;   // deformable objects only
+};
+
+struct SceneDescription {
+  std::vector<ObjectDescription> objects;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> ignored_pairs;  // (a < b): never collide
+
+  std::uint32_t add(ObjectDescription object);
+  void ignore(std::uint32_t a, std::uint32_t b);
+  bool may_collide(std::uint32_t a, std::uint32_t b) const;
+};
+
+// A loaded scene's objects at one of its frames.
+SceneDescription describe(const Scene& scene, std::size_t frame = 0);
+
+struct DetectorOptions {
+  SolverOptions solver;  // elementary tests: solver, precision, tolerance, minimum separation
+  FrontMode front = FrontMode::exact;
+  // Deferred front: device memory for the front (both of its buffers), in MiB.
+  double front_budget_mb = 16;
+  runtime::Registration registration = runtime::Registration::segmented_lock;
+  // Per-pass device times (OpenCL profiling events); off saves little.
+  bool profile = true;
+  // First capacity of every variable-length stream; 0 sizes them from the scene.
+  // Streams grow as needed either way (tests force tiny capacities to prove it).
+  std::size_t initial_capacity = 0;
+};
+
+// What detect() reads back.
+enum class Report {
+  contacts,     // every contact (and the earliest time per object)
+  earliest_toi  // only the earliest time of impact per object
+};
+
+struct DetectorStats {
+  runtime::RunStats run;            // the last step: per-pass device time, per-stream counts and bytes
+  std::size_t front_pairs = 0;      // the front carried to the next step
+  std::uint32_t front_level_cap = 0;  // deepest level the front may hold (deferred)
+  unsigned front_retries = 0;       // runs repeated at a coarser front to fit the budget
+  std::size_t triangle_pairs = 0, vf_candidates = 0, ee_candidates = 0, contacts = 0;
+  double host_ms = 0;               // wall time of the last detect(), uploads and readbacks included
+  std::uint64_t device_ns() const;  // sum of the passes' device time
+  std::size_t device_bytes() const; // streams and scratch
+};
+
+// Continuous collision detection of one scene on one device.
+//
+// Each step moves every object linearly from its start to its end positions; contacts
+// are the vertex-face and edge-edge pairs that touch within the step (or come closer
+// than the minimum separation), with their first time of impact. The start of a step
+// is the end of the one before; objects given no new positions stay where they are.
+// Bad input (an unknown object, a static one moved, a wrong vertex count, NaN or
+// infinite coordinates) is an InputError that changes nothing.
+class Detector {
+public:
+  Detector(runtime::Context& device, SceneDescription scene, DetectorOptions options = {});
+  ~Detector();
+  Detector(const Detector&) = delete;
+  Detector& operator=(const Detector&) = delete;
+
+  std::uint32_t object(const std::string& name) const;
+  // The positions at the end of the next step.
+  void set_positions(std::uint32_t object, const std::vector<Vec3>& end);
+  // Both ends of the next step (replaying recorded frames, repeating a step).
+  void set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end);
+
+  void detect(Report report = Report::contacts);
+
+  // The last step's contacts in canonical order (needs Report::contacts).
+  const std::vector<Contact>& contacts() const;
+  // Per object, the earliest time of impact in the last step (1 without contact),
+  // rounded down to float.
+  std::vector<double> earliest_toi() const;
+  // The last step's feature pairs before the elementary tests, as the host reference
+  // lays them out.
+  Candidates candidates() const;
+  const DetectorStats& stats() const;
+  const runtime::StreamGraph& graph() const;
+  const SceneDescription& scene() const;
+
+private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace cstreams

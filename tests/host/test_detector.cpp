@@ -1,0 +1,341 @@
+// The device pipeline through the public API, against the host reference.
+#include "../support/shared_data.hpp"
+#include "../support/test_device.hpp"
+
+#include <cstreams/ccd_graph.hpp>
+#include <cstreams/detector.hpp>
+#include <cstreams/errors.hpp>
+#include <cstreams/reference_ccd.hpp>
+#include <cstreams/scenes/generators.hpp>
+#include <cstreams/scenes/shapes.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+using namespace cstreams;
+
+namespace {
+
+Scene generated(const std::string& name, int frames, int resolution)
+{
+  const auto folder = (std::filesystem::temp_directory_path() / ("cstreams-detector-" + name)).string();
+  std::filesystem::remove_all(folder);
+  return load_scene(scenes::generate_scene({name, folder, 1, frames, resolution}));
+}
+
+Scene funnel()
+{
+  const std::string dir = cstreams::test::shared_path("scenes-data/scalable-ccd-sample/cloth-funnel/frames/");
+  return scene_from_frames({dir + "227.ply", dir + "228.ply"});
+}
+
+// Runs one step of `scene` from `frame` through a detector built at that frame.
+void run_step(Detector& detector, const Step& step)
+{
+  for (std::uint32_t o = 0; o < step.x0.size(); ++o)
+    if (step.scene->objects[o].kind != ObjectKind::static_) detector.set_step(o, step.x0[o], step.x1[o]);
+  detector.detect();
+}
+
+void check_candidates(const Scene& scene, std::size_t frame, const DetectorOptions& options)
+{
+  INFO("scene " << scene.name << ", frame " << frame << ", front " << to_string(options.front) << ", "
+                << runtime::to_string(options.registration) << ", separation " << options.solver.min_separation);
+  const Step step = load_step(scene, frame);
+  ReferenceOptions host;
+  host.bounds = BoundsPrecision::single;
+  host.solver.min_separation = options.solver.min_separation;
+  const Candidates expected = reference_broad_phase(step, host);
+  Detector detector(cstreams::test::device(), describe(scene, frame), options);
+  run_step(detector, step);
+  const Candidates got = detector.candidates();
+  CHECK(got.vf_count() == expected.vf_count());
+  CHECK(got.ee_count() == expected.ee_count());
+  CHECK(got == expected);
+  CHECK(got.vf_count() > 0);
+  // The same step again, the front now tracked from the last: the same pairs; and in
+  // the steady state (a third time) nothing grows.
+  run_step(detector, step);
+  CHECK(detector.candidates() == expected);
+  run_step(detector, step);
+  for (const auto& p : detector.stats().run.passes) CHECK(p.reruns == 0);
+}
+
+std::vector<std::string> names(const std::vector<runtime::PassSpec>& passes)
+{
+  std::vector<std::string> out;
+  for (const auto& p : passes) out.push_back(p.name);
+  return out;
+}
+
+std::vector<std::string> names(const std::vector<runtime::StreamSpec>& streams)
+{
+  std::vector<std::string> out;
+  for (const auto& s : streams) out.push_back(s.name);
+  return out;
+}
+
+bool contains(const std::vector<std::string>& list, const std::string& item)
+{
+  return std::find(list.begin(), list.end(), item) != list.end();
+}
+
+ObjectDescription ball(const std::string& name, const Vec3& centre, ObjectKind kind, bool self)
+{
+  Mesh m = scenes::icosphere(1, 0.5);
+  for (auto& p : m.positions) p += centre;
+  return {name, m.faces, m.positions, kind, self};
+}
+
+}  // namespace
+
+TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
+{
+  DetectorOptions options;
+  auto graph_of = [&](const SceneDescription& scene) {
+    const SceneLayout layout = make_layout(scene, 0);
+    return build_ccd_graph(layout, options, expand_front(layout, 64).size()).graph;
+  };
+
+  SECTION("one self-colliding deformable object")
+  {
+    SceneDescription scene;
+    scene.add(ball("cloth", {0, 0, 0}, ObjectKind::deformable, true));
+    const auto g = graph_of(scene);
+    const auto passes = names(g.passes()), streams = names(g.streams());
+    CHECK(contains(passes, "face bounds"));
+    CHECK(contains(passes, "refit level 0"));
+    CHECK(contains(passes, "front update"));
+    CHECK(contains(passes, "cull orphan vf"));
+    CHECK(contains(passes, "cull orphan ee"));
+    CHECK(contains(passes, "test orphan ee candidates"));
+    CHECK(contains(streams, "front"));
+    CHECK(contains(streams, "next front"));
+    CHECK(!contains(streams, "x0 double"));
+  }
+  SECTION("no self-collision: no orphans, and a lone object has no front at all")
+  {
+    SceneDescription scene;
+    scene.add(ball("a", {0, 0, 0}, ObjectKind::deformable, false));
+    auto g = graph_of(scene);
+    CHECK(!contains(names(g.passes()), "front update"));
+    CHECK(!contains(names(g.streams()), "orphan vf"));
+    CHECK(contains(names(g.passes()), "face bounds"));  // still refit: it moves
+
+    scene.add(ball("b", {2, 0, 0}, ObjectKind::rigid, true));  // rigid: never self
+    g = graph_of(scene);
+    const auto passes = names(g.passes()), streams = names(g.streams());
+    CHECK(contains(passes, "front update"));
+    CHECK(!contains(passes, "cull orphan vf"));
+    CHECK(!contains(streams, "orphan vf candidates"));
+  }
+  SECTION("static objects get no refit; static-static and masked pairs never enter the front")
+  {
+    SceneDescription scene;
+    scene.add(ball("floor", {0, 0, 0}, ObjectKind::static_, true));
+    scene.add(ball("wall", {1, 0, 0}, ObjectKind::static_, true));
+    auto g = graph_of(scene);
+    CHECK(names(g.passes()).empty());  // nothing moves and nothing may collide
+
+    const auto mover = scene.add(ball("mover", {0, 1, 0}, ObjectKind::rigid, false));
+    SceneLayout layout = make_layout(scene, 0);
+    CHECK(layout.seeds.size() == 2);  // mover against each static object
+    CHECK(layout.moving_faces == scene.objects[mover].faces.size());
+    CHECK(layout.slots.front().object == mover);  // moving objects first
+    g = graph_of(scene);
+    // Bounds passes cover the mover only; static bounds are uploaded once.
+    CHECK(contains(names(g.passes()), "face bounds"));
+    const std::size_t refits = std::count_if(g.passes().begin(), g.passes().end(),
+                                             [](const auto& p) { return p.name.rfind("refit", 0) == 0; });
+    CHECK(refits == layout.trees[mover].depth());
+    CHECK(g.passes().front().items == layout.moving_faces);
+
+    scene.ignore(0, mover);
+    scene.ignore(1, mover);
+    CHECK(make_layout(scene, 0).seeds.empty());
+    CHECK(!contains(names(graph_of(scene).passes()), "front update"));
+  }
+  SECTION("front mode none keeps no front; double precision adds exact positions")
+  {
+    SceneDescription scene;
+    scene.add(ball("cloth", {0, 0, 0}, ObjectKind::deformable, true));
+    options.front = FrontMode::none;
+    options.solver.precision = Precision::double_;
+    const auto g = graph_of(scene);
+    CHECK(contains(names(g.passes()), "search from seeds"));
+    CHECK(!contains(names(g.streams()), "next front"));
+    CHECK(contains(names(g.streams()), "x0 double"));
+  }
+}
+
+TEST_CASE("device candidates equal the host's in float boxes, in every front mode", "[detector][quick]")
+{
+  const Scene f = funnel();
+  DetectorOptions options;
+  for (auto front : {FrontMode::none, FrontMode::exact, FrontMode::deferred}) {
+    options.front = front;
+    options.solver.min_separation = 0;
+    check_candidates(f, 0, options);
+  }
+  options.front = FrontMode::exact;
+  options.solver.min_separation = 1e-3;
+  check_candidates(f, 0, options);
+
+  // Multi-object scenes: cloth against a static sphere, and tumbling rigid bodies.
+  options.solver.min_separation = 0;
+  const Scene cloth = generated("cloth-sphere", 36, 40);
+  check_candidates(cloth, 33, options);
+  Scene bart = generated("bart", 12, 0);
+  bart.ignored_pairs.emplace_back(0, 1);
+  bart.ignored_pairs.emplace_back(2, 5);
+  options.registration = runtime::Registration::lock_free;
+  check_candidates(bart, 8, options);
+}
+
+namespace {
+
+// Contacts of every step of `scene` through one detector fed frame by frame.
+std::vector<std::vector<Contact>> run_frames(const Scene& scene, const DetectorOptions& options, std::size_t first,
+                                             std::size_t last, DetectorStats* deepest = nullptr)
+{
+  Detector detector(cstreams::test::device(), describe(scene, first), options);
+  std::vector<std::vector<Contact>> out;
+  for (std::size_t frame = first; frame < last; ++frame) {
+    for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
+      if (scene.objects[o].kind != ObjectKind::static_) detector.set_positions(o, scene.positions(o, frame + 1));
+    detector.detect();
+    out.push_back(detector.contacts());
+    if (deepest && detector.stats().front_pairs >= deepest->front_pairs) *deepest = detector.stats();
+  }
+  return out;
+}
+
+bool same(const std::vector<std::vector<Contact>>& a, const std::vector<std::vector<Contact>>& b)
+{
+  if (a.size() != b.size()) return false;
+  for (std::size_t f = 0; f < a.size(); ++f) {
+    if (a[f].size() != b[f].size()) return false;
+    for (std::size_t i = 0; i < a[f].size(); ++i)
+      if (!a[f][i].same_features(b[f][i]) || a[f][i].toi != b[f][i].toi) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("front modes, registrations and tiny capacities report identical contacts over many frames",
+          "[detector][quick]")
+{
+  const Scene cloth = generated("cloth-sphere", 30, 30);
+  DetectorOptions options;
+  options.front = FrontMode::none;
+  const auto expected = run_frames(cloth, options, 10, 29);
+  std::size_t total = 0;
+  for (const auto& c : expected) total += c.size();
+  CHECK(total > 100);
+
+  DetectorStats exact_stats, deferred_stats;
+  options.front = FrontMode::exact;
+  CHECK(same(run_frames(cloth, options, 10, 29, &exact_stats), expected));
+  options.front = FrontMode::deferred;
+  // A budget far below the exact front's: it must be kept at coarser levels.
+  options.front_budget_mb = double(exact_stats.front_pairs * 8 * 2) / 4 / (1024 * 1024);
+  CHECK(same(run_frames(cloth, options, 10, 29, &deferred_stats), expected));
+  CHECK(deferred_stats.front_pairs < exact_stats.front_pairs);
+  CHECK(deferred_stats.front_level_cap < 2 * 20);
+
+  options.front = FrontMode::exact;
+  options.registration = runtime::Registration::lock_free;
+  CHECK(same(run_frames(cloth, options, 10, 29), expected));
+  options.registration = runtime::Registration::global_atomic;
+  options.initial_capacity = 1;
+  CHECK(same(run_frames(cloth, options, 10, 29), expected));
+  options.registration = runtime::Registration::segmented_lock;
+  options.front = FrontMode::deferred;
+  CHECK(same(run_frames(cloth, options, 10, 29), expected));
+}
+
+TEST_CASE("device contacts equal the solver's on the host's candidates, in both precisions", "[detector][quick]")
+{
+  const Scene cloth = generated("cloth-sphere", 36, 40);
+  const Step step = load_step(cloth, 33);
+  ReferenceOptions host;
+  host.bounds = BoundsPrecision::single;
+  const Candidates candidates = reference_broad_phase(step, host);
+  for (auto precision : {Precision::single, Precision::double_}) {
+    INFO(to_string(precision));
+    DetectorOptions options;
+    options.solver.precision = precision;
+    Detector detector(cstreams::test::device(), describe(cloth, 33), options);
+    run_step(detector, step);
+    std::vector<Contact> expected;
+    DeviceSolver elementary(cstreams::test::device(), options.solver);
+    for (const auto& block : candidates.blocks) {
+      std::vector<Query> vf, ee;
+      for (const auto& p : block.vf) vf.push_back(vertex_face_query(step, block.object_a, block.object_b, p));
+      for (const auto& p : block.ee) ee.push_back(edge_edge_query(step, block.object_a, block.object_b, p));
+      const auto rv = elementary.solve(ContactKind::vertex_face, vf), re = elementary.solve(ContactKind::edge_edge, ee);
+      for (std::size_t i = 0; i < vf.size(); ++i)
+        if (rv[i].collides()) expected.push_back(make_contact(step, block.object_a, block.object_b, block.vf[i], rv[i].toi));
+      for (std::size_t i = 0; i < ee.size(); ++i)
+        if (re[i].collides()) expected.push_back(make_contact(step, block.object_a, block.object_b, block.ee[i], re[i].toi));
+    }
+    sort_canonical(expected);
+    const auto& got = detector.contacts();
+    REQUIRE(got.size() == expected.size());
+    bool inter_object = false;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      CHECK(got[i].same_features(expected[i]));
+      CHECK(got[i].toi == expected[i].toi);
+      inter_object |= got[i].object_a != got[i].object_b;
+    }
+    CHECK(inter_object);
+
+    // Earliest times per object, without the list: the list's minimum, rounded down.
+    const auto earliest = detector.earliest_toi();
+    for (std::uint32_t o = 0; o < cloth.objects.size(); ++o) {
+      double first = 1;
+      for (const auto& c : got)
+        if (c.object_a == o || c.object_b == o) first = std::min(first, c.toi);
+      CHECK(earliest[o] <= first);
+      CHECK(earliest[o] >= double(std::nextafter(float(first), 0.0f)));
+    }
+    detector.detect(Report::earliest_toi);
+    CHECK_THROWS_WITH(detector.contacts(), Catch::Contains("earliest"));
+  }
+}
+
+TEST_CASE("bad input at the API is a clear error and the detector stays usable", "[detector][quick]")
+{
+  const Scene cloth = generated("cloth-sphere", 36, 30);
+  Detector detector(cstreams::test::device(), describe(cloth, 30));
+  const Step step = load_step(cloth, 30);
+  run_step(detector, step);
+  const std::vector<Contact> before = detector.contacts();
+  REQUIRE(!before.empty());
+
+  const std::uint32_t sheet = detector.object("cloth"), sphere = detector.object("sphere");
+  CHECK_THROWS_WITH(detector.object("table"), Catch::Contains("no object named 'table'"));
+  CHECK_THROWS_WITH(detector.set_positions(7, step.x1[0]), Catch::Contains("no object 7"));
+  CHECK_THROWS_WITH(detector.set_positions(sphere, step.x1[sphere]), Catch::Contains("'sphere' is static"));
+  auto fewer = step.x1[sheet];
+  fewer.pop_back();
+  CHECK_THROWS_WITH(detector.set_positions(sheet, fewer), Catch::Contains("vertices, not " + std::to_string(fewer.size())));
+  auto nan = step.x1[sheet];
+  nan[17].y() = std::nan("");
+  CHECK_THROWS_AS(detector.set_step(sheet, step.x0[sheet], nan), InputError);
+  CHECK_THROWS_WITH(detector.set_step(sheet, step.x0[sheet], nan), Catch::Contains("'cloth': vertex 17"));
+
+  run_step(detector, step);
+  REQUIRE(detector.contacts().size() == before.size());
+  for (std::size_t i = 0; i < before.size(); ++i) CHECK(detector.contacts()[i].same_features(before[i]));
+
+  SceneDescription broken;
+  broken.add({"tri", {{0, 1, 1}}, {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}});
+  CHECK_THROWS_WITH(Detector(cstreams::test::device(), broken), Catch::Contains("object 'tri': face 0 repeats a vertex"));
+  broken.objects[0].faces = {{0, 1, 3}};
+  CHECK_THROWS_WITH(Detector(cstreams::test::device(), broken), Catch::Contains("face 0 uses vertex 3 of 3"));
+}
