@@ -17,7 +17,9 @@
  *   CS_REG_LOCK_FREE       a segment per work-item with a private counter, then
  *                          prefix sum and merge (the paper's lock-free variant).
  * Counters keep counting past capacity; an overflowing segment also raises its pass's
- * overflow slot to its count, so the host learns the capacity it must grow to. */
+ * overflow slot to its count, so the host learns the capacity it must grow to. With
+ * segmented locks every work-group raises it (one atomic a group), so the host also
+ * learns when segments sized for an earlier burst have become far too large. */
 #include "common.h"
 
 #define CS_REG_GLOBAL_ATOMIC 0
@@ -59,7 +61,7 @@
   barrier(CLK_LOCAL_MEM_FENCE);                                                               \
   if (get_local_id(0) == 0) {                                                                 \
     P##_counts[get_group_id(0)] = P##_group_count;                                            \
-    if (P##_group_count > P##_capacity) atomic_max(&P##_counters[P##_slot], P##_group_count); \
+    atomic_max(&P##_counters[P##_slot], P##_group_count);                                     \
   }
 
 #elif CS_REGISTRATION == CS_REG_LOCK_FREE

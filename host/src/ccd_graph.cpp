@@ -3,6 +3,7 @@
 #include <cstreams/float_bounds.hpp>
 
 #include <algorithm>
+#include <cstring>
 
 namespace cstreams {
 
@@ -351,7 +352,8 @@ CcdGraph build_ccd_graph(const SceneLayout& l, const DetectorOptions& options, s
       .arg(value_of(cl_uint(l.slots.size())))
       .arg(buffer_of(s.earliest));
   for (const auto& [found, kind] : s.contacts)
-    g.pass("earliest toi of " + g.stream(found).name, {earliest, "cs_earliest_toi", time_options})
+    g.pass("earliest toi of " + g.stream(found).name.substr(std::strlen("contacts from ")),
+           {earliest, "cs_earliest_toi", time_options})
         .launch_over(found)
         .update(s.earliest)
         .arg(buffer_of(found))

@@ -121,20 +121,27 @@ struct Scheduler::State {
     if (p.spec->culls()) p.kernel.set_arg(index++, p.keep);
   }
 
+  std::size_t first_segment_capacity(const PassSpec& spec) const
+  {
+    const bool per_group = options.registration == Registration::segmented_lock;
+    return std::max<std::size_t>(
+        1, std::size_t(std::ceil(spec.items_per_work_item * double(per_group ? context.work_group_size() : 1))));
+  }
+
   void prepare_segments(PassState& p, EmitterState& e, std::size_t global)
   {
     const std::size_t wg = context.work_group_size();
     const bool per_group = options.registration == Registration::segmented_lock;
     e.segments = per_group ? global / wg : global;
-    if (e.segment_capacity == 0)
-      e.segment_capacity =
-          std::max<std::size_t>(1, std::size_t(std::ceil(p.spec->items_per_work_item * double(per_group ? wg : 1))));
+    if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
     const std::size_t bytes = e.segments * e.segment_capacity * spec(e.stream).element_bytes;
     if (bytes > context.device().max_allocation)
       throw Error("pass " + p.spec->name + " needs " + std::to_string(bytes >> 20) + " MiB of " +
                   to_string(options.registration) + " segments for stream " + spec(e.stream).name +
                   " (up to " + std::to_string(e.segment_capacity) + " items per segment), more than one allocation of " +
                   context.device().name + " may hold; the segmented-lock registration needs far less");
+    // Segments sized for an earlier burst give their memory back once it has passed.
+    if (e.items.bytes() > 4 * bytes + (1u << 20)) e.items = Buffer();
     ensure_capacity(context, e.items, bytes, "registration segments");
     ensure_capacity(context, e.counts, e.segments * sizeof(cl_uint), "registration counts");
   }
@@ -216,12 +223,24 @@ struct Scheduler::State {
         ++p->stats.reruns;
       }
     }
+    if (options.registration == Registration::segmented_lock)
+      for (PassState* p : stage)
+        for (auto& e : p->emitters) shrink_segments(*p, e, host_counters[e.overflow_slot]);
     for (PassState* p : stage)
       for (StreamId s : pass_outputs(*p->spec))
         if (spec(s).variable) {
           state(s).count = host_counters[state(s).slot];
           state(s).known = true;
         }
+  }
+
+  // The next run's segments hold the busiest work-group of this one with room to
+  // spare, no more: a burst (a first step searched from the roots) must not pin its
+  // memory for good.
+  void shrink_segments(const PassState& p, EmitterState& e, std::size_t busiest)
+  {
+    const std::size_t enough = std::max(first_segment_capacity(*p.spec), grown(busiest));
+    if (e.segment_capacity > 4 * enough) e.segment_capacity = enough;
   }
 
   bool needs_new_stage(const PassState& p)

@@ -1,5 +1,11 @@
 #pragma once
+#include <cstreams/scene.hpp>
+
 #include <CLI/CLI.hpp>
+
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace cstreams::cli {
 
@@ -10,5 +16,11 @@ void add_info_command(CLI::App& app);
 void add_generate_command(CLI::App& app);
 void add_reference_command(CLI::App& app);
 void add_accuracy_command(CLI::App& app);
+void add_run_command(CLI::App& app);
+
+// A manifest or mesh file, or several mesh files as the frames of one mesh.
+Scene open_scene(const std::vector<std::string>& paths, bool split);
+// "A:B" steps from frame A up to (not including) B; "A" one step; empty: every step.
+std::pair<std::size_t, std::size_t> step_range(const std::string& text, std::size_t frame_count);
 
 }  // namespace cstreams::cli

@@ -12,6 +12,7 @@ int main(int argc, char** argv)
   cstreams::cli::add_generate_command(app);
   cstreams::cli::add_reference_command(app);
   cstreams::cli::add_accuracy_command(app);
+  cstreams::cli::add_run_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

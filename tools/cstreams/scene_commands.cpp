@@ -14,6 +14,29 @@
 
 namespace cstreams::cli {
 
+Scene open_scene(const std::vector<std::string>& paths, bool split)
+{
+  if (paths.size() == 1 && !split) return load_scene(paths[0]);
+  return scene_from_frames(paths, split);
+}
+
+std::pair<std::size_t, std::size_t> step_range(const std::string& text, std::size_t frame_count)
+{
+  const std::size_t steps = frame_count > 1 ? frame_count - 1 : 1;
+  if (text.empty()) return {0, steps};
+  std::size_t a = 0, b = 0;
+  const auto colon = text.find(':');
+  try {
+    a = std::stoul(text.substr(0, colon));
+    b = colon == std::string::npos ? a + 1 : std::stoul(text.substr(colon + 1));
+  } catch (const std::exception&) {
+    throw InputError("--frames '" + text + "' is not A or A:B");
+  }
+  if (a >= b || b > steps)
+    throw InputError("--frames " + text + " is outside the scene's steps 0:" + std::to_string(steps));
+  return {a, b};
+}
+
 namespace {
 
 struct InfoOptions {
@@ -21,13 +44,6 @@ struct InfoOptions {
   bool split = false;
   bool json = false;
 };
-
-// A manifest or mesh file, or several mesh files as the frames of one mesh.
-Scene open_scene(const std::vector<std::string>& paths, bool split)
-{
-  if (paths.size() == 1 && !split) return load_scene(paths[0]);
-  return scene_from_frames(paths, split);
-}
 
 void info(const InfoOptions& o)
 {
@@ -100,24 +116,6 @@ struct ReferenceCommandOptions {
   bool brute_force = false;
   ReferenceSolverOptions solver;
 };
-
-// "A:B" steps from frame A up to (not including) B; "A" one step; empty: every step.
-std::pair<std::size_t, std::size_t> step_range(const std::string& text, std::size_t frame_count)
-{
-  const std::size_t steps = frame_count > 1 ? frame_count - 1 : 1;
-  if (text.empty()) return {0, steps};
-  std::size_t a = 0, b = 0;
-  const auto colon = text.find(':');
-  try {
-    a = std::stoul(text.substr(0, colon));
-    b = colon == std::string::npos ? a + 1 : std::stoul(text.substr(colon + 1));
-  } catch (const std::exception&) {
-    throw InputError("--frames '" + text + "' is not A or A:B");
-  }
-  if (a >= b || b > steps)
-    throw InputError("--frames " + text + " is outside the scene's steps 0:" + std::to_string(steps));
-  return {a, b};
-}
 
 void reference(const ReferenceCommandOptions& o)
 {
