@@ -5,6 +5,7 @@ per-step wall time, device time, where the device time goes, memory and counts.
 
   tools/bench_pipeline.py [--cstreams build/bin/cstreams] [--shared ../shared]
                           [--device FILTER] [--repeat 11] [--out DIR] [--modes none,exact,deferred]
+                          [--front-budget MB] [--solver conservative|cubic]
 """
 import argparse
 import json
@@ -39,6 +40,7 @@ def main():
     ap.add_argument("--out", default="bench-out")
     ap.add_argument("--modes", default="none,exact,deferred")
     ap.add_argument("--front-budget", default="4")
+    ap.add_argument("--solver", default="conservative")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     print("| scene | faces | front | step ms | device ms | bounds+refit | front | decompose+orphans | tests | other "
@@ -47,9 +49,10 @@ def main():
     for scene, f0, f1 in STEPS:
         frames = os.path.join(args.shared, "scenes-data/scalable-ccd-sample", scene, "frames")
         for mode in args.modes.split(","):
-            out = os.path.join(args.out, f"{scene}-{mode}.json")
+            out = os.path.join(args.out, f"{scene}-{mode}-{args.solver}.json")
             cmd = [args.cstreams, "run", os.path.join(frames, f0), os.path.join(frames, f1), "--front", mode,
-                   "--front-budget", args.front_budget, "--repeat", str(args.repeat), "--json", out]
+                   "--front-budget", args.front_budget, "--solver", args.solver, "--repeat", str(args.repeat),
+                   "--json", out]
             if args.device:
                 cmd += ["--device", args.device]
             subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

@@ -34,7 +34,10 @@ struct EmitterState {
 
 struct PassState {
   const PassSpec* spec = nullptr;
-  Kernel kernel;
+  Kernel kernel;          // built for the scheduler's registration
+  Kernel atomic_kernel;   // built on first need: the fallback when segments would not fit
+  Registration mode = Registration::global_atomic;  // of the current execution
+  const Kernel& active() const { return mode == Registration::global_atomic && atomic_kernel.get() ? atomic_kernel : kernel; }
   std::vector<EmitterState> emitters;
   Buffer keep;
   std::vector<StreamId> inputs;
@@ -88,37 +91,38 @@ struct Scheduler::State {
 
   void bind_args(PassState& p)
   {
+    const Kernel& k = p.active();
     unsigned index = 0;
     for (const auto& a : p.spec->args) {
-      if (auto b = std::get_if<BufferArg>(&a)) p.kernel.set_arg(index, state(b->stream).buffer);
-      else if (auto c = std::get_if<CountArg>(&a)) p.kernel.set_arg(index, cl_uint(state(c->stream).count));
-      else if (auto v = std::get_if<ValueArg>(&a)) p.kernel.set_raw(index, v->bytes.size(), v->bytes.data());
+      if (auto b = std::get_if<BufferArg>(&a)) k.set_arg(index, state(b->stream).buffer);
+      else if (auto c = std::get_if<CountArg>(&a)) k.set_arg(index, cl_uint(state(c->stream).count));
+      else if (auto v = std::get_if<ValueArg>(&a)) k.set_raw(index, v->bytes.size(), v->bytes.data());
       else {
         const auto& bytes = params.at(std::get<ParamArg>(a).param.index);
         if (bytes.empty())
           throw Error("pass " + p.spec->name + " needs parameter " +
                       graph.params()[std::get<ParamArg>(a).param.index].name + ", which was never set");
-        p.kernel.set_raw(index, bytes.size(), bytes.data());
+        k.set_raw(index, bytes.size(), bytes.data());
       }
       ++index;
     }
     for (auto& e : p.emitters) {
       auto& dst = state(e.stream);
-      if (options.registration == Registration::global_atomic) {
-        p.kernel.set_arg(index++, dst.buffer);
-        p.kernel.set_arg(index++, counters);
-        p.kernel.set_arg(index++, cl_uint(dst.capacity));
-        p.kernel.set_arg(index++, counters);
-        p.kernel.set_arg(index++, cl_uint(dst.slot));
+      if (p.mode == Registration::global_atomic) {
+        k.set_arg(index++, dst.buffer);
+        k.set_arg(index++, counters);
+        k.set_arg(index++, cl_uint(dst.capacity));
+        k.set_arg(index++, counters);
+        k.set_arg(index++, cl_uint(dst.slot));
       } else {
-        p.kernel.set_arg(index++, e.items);
-        p.kernel.set_arg(index++, e.counts);
-        p.kernel.set_arg(index++, cl_uint(e.segment_capacity));
-        p.kernel.set_arg(index++, counters);
-        p.kernel.set_arg(index++, cl_uint(e.overflow_slot));
+        k.set_arg(index++, e.items);
+        k.set_arg(index++, e.counts);
+        k.set_arg(index++, cl_uint(e.segment_capacity));
+        k.set_arg(index++, counters);
+        k.set_arg(index++, cl_uint(e.overflow_slot));
       }
     }
-    if (p.spec->culls()) p.kernel.set_arg(index++, p.keep);
+    if (p.spec->culls()) k.set_arg(index++, p.keep);
   }
 
   std::size_t first_segment_capacity(const PassSpec& spec) const
@@ -128,18 +132,22 @@ struct Scheduler::State {
         1, std::size_t(std::ceil(spec.items_per_work_item * double(per_group ? context.work_group_size() : 1))));
   }
 
-  void prepare_segments(PassState& p, EmitterState& e, std::size_t global)
+  // Segments hold as much as the busiest segment of the last run, so one burst (a
+  // first step searched from the roots, say) can ask for more memory than the device
+  // has. Then the pass registers this run through one global counter instead: slower
+  // under contention, but its memory is the stream itself.
+  bool segments_fit(const EmitterState& e, std::size_t global) const
   {
-    const std::size_t wg = context.work_group_size();
     const bool per_group = options.registration == Registration::segmented_lock;
-    e.segments = per_group ? global / wg : global;
-    if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
+    const std::size_t segments = per_group ? global / context.work_group_size() : global;
+    return segments * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation / 2;
+  }
+
+  void prepare_segments(EmitterState& e, std::size_t global)
+  {
+    const bool per_group = options.registration == Registration::segmented_lock;
+    e.segments = per_group ? global / context.work_group_size() : global;
     const std::size_t bytes = e.segments * e.segment_capacity * spec(e.stream).element_bytes;
-    if (bytes > context.device().max_allocation)
-      throw Error("pass " + p.spec->name + " needs " + std::to_string(bytes >> 20) + " MiB of " +
-                  to_string(options.registration) + " segments for stream " + spec(e.stream).name +
-                  " (up to " + std::to_string(e.segment_capacity) + " items per segment), more than one allocation of " +
-                  context.device().name + " may hold; the segmented-lock registration needs far less");
     // Segments sized for an earlier burst give their memory back once it has passed.
     if (e.items.bytes() > 4 * bytes + (1u << 20)) e.items = Buffer();
     ensure_capacity(context, e.items, bytes, "registration segments");
@@ -151,17 +159,28 @@ struct Scheduler::State {
     const std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     const std::size_t wg = context.work_group_size();
     const std::size_t global = round_up(n, wg);
-    const bool segmented = options.registration != Registration::global_atomic;
     const std::string& label = p.spec->name;
     if (redo == Redo::full) {
-      if (segmented)
-        for (auto& e : p.emitters) prepare_segments(p, e, global);
+      p.mode = options.registration;
+      for (auto& e : p.emitters) {
+        if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
+        if (p.mode != Registration::global_atomic && !segments_fit(e, global)) {
+          p.mode = Registration::global_atomic;
+          if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
+        }
+      }
+      if (p.mode == Registration::global_atomic) {
+        // The next run tries small segments again.
+        for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(*p.spec);
+      } else {
+        for (auto& e : p.emitters) prepare_segments(e, global);
+      }
       if (p.spec->culls()) ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags");
       bind_args(p);
-      context.launch(p.kernel, global, wg, tl(), label);
+      context.launch(p.active(), global, wg, tl(), label);
       ++p.stats.launches;
     }
-    if (segmented) {
+    if (p.mode != Registration::global_atomic) {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
         ensure_capacity(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
@@ -187,12 +206,12 @@ struct Scheduler::State {
     if (std::none_of(stage.begin(), stage.end(),
                      [](const PassState* p) { return !p->emitters.empty() || p->spec->culls(); }))
       return;
-    const bool atomic = options.registration == Registration::global_atomic;
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
       std::vector<std::pair<PassState*, Redo>> redo;
       for (PassState* p : stage) {
+        const bool atomic = p->mode == Registration::global_atomic;
         Redo r = Redo::none;
         for (auto& e : p->emitters) {
           auto& dst = state(e.stream);
@@ -216,6 +235,7 @@ struct Scheduler::State {
       }
       if (redo.empty()) break;
       for (auto& [p, r] : redo) {
+        const bool atomic = p->mode == Registration::global_atomic;
         if (r == Redo::full)
           for (auto& e : p->emitters)
             context.fill_u32(counters, 0, atomic ? state(e.stream).slot : e.overflow_slot, 1, tl());
@@ -223,8 +243,8 @@ struct Scheduler::State {
         ++p->stats.reruns;
       }
     }
-    if (options.registration == Registration::segmented_lock)
-      for (PassState* p : stage)
+    for (PassState* p : stage)
+      if (p->mode == Registration::segmented_lock)
         for (auto& e : p->emitters) shrink_segments(*p, e, host_counters[e.overflow_slot]);
     for (PassState* p : stage)
       for (StreamId s : pass_outputs(*p->spec))
@@ -241,6 +261,13 @@ struct Scheduler::State {
   {
     const std::size_t enough = std::max(first_segment_capacity(*p.spec), grown(busiest));
     if (e.segment_capacity > 4 * enough) e.segment_capacity = enough;
+  }
+
+  Kernel build_kernel(const PassSpec& spec, Registration mode)
+  {
+    const std::string define = registration_define(mode);
+    const std::string opts = spec.kernel.options.empty() ? define : spec.kernel.options + " " + define;
+    return context.programs().kernel(spec.kernel.program, spec.kernel.kernel, opts);
   }
 
   bool needs_new_stage(const PassState& p)
@@ -314,13 +341,11 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     }
   }
   s.params.resize(s.graph.params().size());
-  const std::string define = registration_define(options.registration);
   for (std::size_t index : order) {
     const PassSpec& spec = s.graph.passes()[index];
     PassState p;
     p.spec = &spec;
-    const std::string opts = spec.kernel.options.empty() ? define : spec.kernel.options + " " + define;
-    p.kernel = context.programs().kernel(spec.kernel.program, spec.kernel.kernel, opts);
+    p.kernel = s.build_kernel(spec, options.registration);
     for (StreamId e : spec.emits) {
       EmitterState es;
       es.stream = e;

@@ -31,6 +31,7 @@ struct RunOptions {
   std::string registration = "segmented-lock";
   double tolerance = SolverOptions{}.tolerance;
   double min_separation = 0;
+  std::uint32_t max_iterations = SolverOptions{}.max_iterations;
   double front_budget = DetectorOptions{}.front_budget_mb;
   std::string frames;
   unsigned repeat = 1;
@@ -114,6 +115,7 @@ void run(const RunOptions& o)
   options.solver.precision = parse_precision(o.precision);
   options.solver.tolerance = o.tolerance;
   options.solver.min_separation = o.min_separation;
+  options.solver.max_iterations = o.max_iterations;
   options.front = parse_front_mode(o.front);
   options.front_budget_mb = o.front_budget;
   options.registration = runtime::parse_registration(o.registration);
@@ -211,6 +213,8 @@ void add_run_command(CLI::App& app)
   cmd->add_option("--precision", o->precision, "single or double");
   cmd->add_option("--tolerance", o->tolerance, "Solver tolerance, relative to the query's coordinates");
   cmd->add_option("--min-separation", o->min_separation, "Distance below which primitives count as colliding");
+  cmd->add_option("--max-iterations", o->max_iterations,
+                  "Conservative solver's work limit per pair; reaching it reports a collision");
   cmd->add_option("--front", o->front, "BVTT front: none, exact or deferred");
   cmd->add_option("--front-budget", o->front_budget, "Deferred front: device memory for the front, MiB");
   cmd->add_option("--registration", o->registration, "segmented-lock, lock-free or global-atomic");
