@@ -1,4 +1,4 @@
-/* Swept bounds of one mesh's features over a step, and the level-by-level refit of its
+/* Swept bounds of features over a step, and the level-by-level refit of the
  * BVH (nodes in breadth-first order: a level's nodes are contiguous and their
  * children lie in the next level). */
 #include "bounds.h"

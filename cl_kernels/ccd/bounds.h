@@ -5,7 +5,7 @@
  * Positions arrive as floats rounded to nearest, so each exact coordinate lies within
  * [cs_fdown(x), cs_fup(x)]; projections on the six diagonal axes add two such bounds
  * and round outward again. A DOP is 18 floats: lo[0..8] then hi[0..8], axes x, y, z,
- * x+y, x-y, y+z, y-z, z+x, z-x. host/src/bounds_f.cpp repeats this arithmetic
+ * x+y, x-y, y+z, y-z, z+x, z-x. host/src/float_bounds.cpp repeats this arithmetic
  * operation for operation, so host and device boxes are equal bit for bit. */
 #pragma OPENCL FP_CONTRACT OFF
 
