@@ -37,6 +37,7 @@ struct PassState {
   Kernel kernel;          // built for the scheduler's registration
   Kernel atomic_kernel;   // built on first need: the fallback when segments would not fit
   Registration mode = Registration::global_atomic;  // of the current execution
+  bool atomic_this_run = false;
   const Kernel& active() const { return mode == Registration::global_atomic && atomic_kernel.get() ? atomic_kernel : kernel; }
   std::vector<EmitterState> emitters;
   Buffer keep;
@@ -140,7 +141,7 @@ struct Scheduler::State {
   {
     const bool per_group = options.registration == Registration::segmented_lock;
     const std::size_t segments = per_group ? global / context.work_group_size() : global;
-    return segments * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation / 2;
+    return segments * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation;
   }
 
   void prepare_segments(EmitterState& e, std::size_t global)
@@ -161,11 +162,13 @@ struct Scheduler::State {
     const std::size_t global = round_up(n, wg);
     const std::string& label = p.spec->name;
     if (redo == Redo::full) {
-      p.mode = options.registration;
+      // Once a run has fallen back it stays there: its reruns must not try segments again.
+      p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
       for (auto& e : p.emitters) {
         if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
         if (p.mode != Registration::global_atomic && !segments_fit(e, global)) {
           p.mode = Registration::global_atomic;
+          p.atomic_this_run = true;
           if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
         }
       }
@@ -280,7 +283,10 @@ struct Scheduler::State {
   {
     timeline.clear();
     stats = RunStats{};
-    for (auto& p : passes) p.stats = PassStats{p.spec->name};
+    for (auto& p : passes) {
+      p.stats = PassStats{p.spec->name};
+      p.atomic_this_run = false;
+    }
     for (const auto& p : passes)
       for (StreamId s : pass_outputs(*p.spec))
         if (spec(s).variable) state(s).known = false;
