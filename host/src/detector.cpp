@@ -193,6 +193,26 @@ struct Detector::State {
   std::uint32_t object_of_face(std::uint32_t f) const { return object_of_vertex(layout.topology.faces[f][0]); }
   std::uint32_t object_of_edge(std::uint32_t e) const { return object_of_vertex(layout.topology.edges[e][0]); }
 
+  // A device feature pair in the host's terms: a vertex of object_a and a face of
+  // object_b, or an edge of object_a and an edge of object_b with object_a <= object_b;
+  // ids local to their objects.
+  struct LocalPair {
+    std::uint32_t object_a, object_b, a, b;
+  };
+  LocalPair local(ContactKind kind, std::uint32_t a, std::uint32_t b) const
+  {
+    if (kind == ContactKind::vertex_face) {
+      const std::uint32_t oa = object_of_vertex(a), ob = object_of_face(b);
+      return {oa, ob, a - slot(oa).first_vertex, b - slot(ob).first_face};
+    }
+    std::uint32_t oa = object_of_edge(a), ob = object_of_edge(b);
+    if (oa > ob) {
+      std::swap(oa, ob);
+      std::swap(a, b);
+    }
+    return {oa, ob, a - slot(oa).first_edge, b - slot(ob).first_edge};
+  }
+
   Contact contact(ContactKind kind, const Found& c) const
   {
     Contact out;
@@ -205,25 +225,21 @@ struct Detector::State {
       std::memcpy(&toi, &c[2], sizeof toi);
       out.toi = toi;
     }
-    const Topology& t = layout.topology;
+    const LocalPair p = local(kind, c[0], c[1]);
+    out.object_a = p.object_a;
+    out.object_b = p.object_b;
     if (kind == ContactKind::vertex_face) {
-      out.object_a = object_of_vertex(c[0]);
-      out.object_b = object_of_face(c[1]);
-      const std::uint32_t va = slot(out.object_a).first_vertex, vb = slot(out.object_b).first_vertex;
-      const Face& f = t.faces[c[1]];
-      out.v = {c[0] - va, f[0] - vb, f[1] - vb, f[2] - vb};
+      const Face& f = object(p.object_b).faces[p.b];
+      out.v = {p.a, f[0], f[1], f[2]};
       return out;
     }
-    std::uint32_t ea = c[0], eb = c[1];
-    out.object_a = object_of_edge(ea);
-    out.object_b = object_of_edge(eb);
-    if (out.object_a > out.object_b) {
-      std::swap(ea, eb);
-      std::swap(out.object_a, out.object_b);
-    }
-    const std::uint32_t va = slot(out.object_a).first_vertex, vb = slot(out.object_b).first_vertex;
-    Edge a{t.edges[ea][0] - va, t.edges[ea][1] - va}, b{t.edges[eb][0] - vb, t.edges[eb][1] - vb};
-    if (out.object_a == out.object_b && b < a) std::swap(a, b);
+    auto edge = [&](std::uint32_t o, std::uint32_t e) {
+      const ObjectSlot& sl = slot(o);
+      const Edge& g = layout.topology.edges[sl.first_edge + e];
+      return Edge{g[0] - sl.first_vertex, g[1] - sl.first_vertex};
+    };
+    Edge a = edge(p.object_a, p.a), b = edge(p.object_b, p.b);
+    if (p.object_a == p.object_b && b < a) std::swap(a, b);
     out.v = {a[0], a[1], b[0], b[1]};
     return out;
   }
@@ -355,17 +371,10 @@ Candidates Detector::candidates() const
     if (!s.has(stream)) continue;
     const ContactKind kind = stream == st.vf || stream == st.kept_vf ? ContactKind::vertex_face : ContactKind::edge_edge;
     for (const Pair& p : s.scheduler->download<Pair>(stream)) {
-      if (kind == ContactKind::vertex_face) {
-        const std::uint32_t oa = s.object_of_vertex(p[0]), ob = s.object_of_face(p[1]);
-        blocks.at({oa, ob}).vf.push_back({p[0] - s.slot(oa).first_vertex, p[1] - s.slot(ob).first_face});
-      } else {
-        std::uint32_t oa = s.object_of_edge(p[0]), ob = s.object_of_edge(p[1]), ea = p[0], eb = p[1];
-        if (oa > ob) {
-          std::swap(oa, ob);
-          std::swap(ea, eb);
-        }
-        blocks.at({oa, ob}).ee.push_back({ea - s.slot(oa).first_edge, eb - s.slot(ob).first_edge});
-      }
+      const auto l = s.local(kind, p[0], p[1]);
+      CandidateBlock& block = blocks.at({l.object_a, l.object_b});
+      if (kind == ContactKind::vertex_face) block.vf.push_back({l.a, l.b});
+      else block.ee.push_back({l.a, l.b});
     }
   }
   Candidates out;

@@ -90,6 +90,12 @@ struct Scheduler::State {
     st.capacity = items;
   }
 
+  // Grows a variable stream to hold `needed` items, with slack up to its limit.
+  void grow(StreamId s, std::size_t needed)
+  {
+    allocate(s, std::min(grown(needed), std::max(state(s).limit, needed)));
+  }
+
   void bind_args(PassState& p)
   {
     const Kernel& k = p.active();
@@ -139,15 +145,17 @@ struct Scheduler::State {
   // under contention, but its memory is the stream itself.
   bool segments_fit(const EmitterState& e, std::size_t global) const
   {
-    const bool per_group = options.registration == Registration::segmented_lock;
-    const std::size_t segments = per_group ? global / context.work_group_size() : global;
-    return segments * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation;
+    return segment_count(global) * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation;
+  }
+
+  std::size_t segment_count(std::size_t global) const
+  {
+    return options.registration == Registration::segmented_lock ? global / context.work_group_size() : global;
   }
 
   void prepare_segments(EmitterState& e, std::size_t global)
   {
-    const bool per_group = options.registration == Registration::segmented_lock;
-    e.segments = per_group ? global / context.work_group_size() : global;
+    e.segments = segment_count(global);
     const std::size_t bytes = e.segments * e.segment_capacity * spec(e.stream).element_bytes;
     // Segments sized for an earlier burst give their memory back once it has passed.
     if (e.items.bytes() > 4 * bytes + (1u << 20)) e.items = Buffer();
@@ -223,14 +231,14 @@ struct Scheduler::State {
             r = Redo::full;
           }
           if (host_counters[dst.slot] > dst.capacity) {
-            allocate(e.stream, std::min(grown(host_counters[dst.slot]), std::max<std::size_t>(dst.limit, host_counters[dst.slot])));
+            grow(e.stream, host_counters[dst.slot]);
             r = std::max(r, atomic ? Redo::full : Redo::pack);
           }
         }
         if (p->spec->culls()) {
           auto& dst = state(p->spec->cull_target);
           if (host_counters[dst.slot] > dst.capacity) {
-            allocate(p->spec->cull_target, std::min(grown(host_counters[dst.slot]), std::max<std::size_t>(dst.limit, host_counters[dst.slot])));
+            grow(p->spec->cull_target, host_counters[dst.slot]);
             r = std::max(r, Redo::pack);
           }
         }
