@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Runs `cstreams run` over the five real steps of ../shared (each step repeated, the
+"""Runs `cstreams run` over the five real steps of scenes/benchmarks (each step repeated, the
 first run a warm-up) in every front mode, and prints one markdown table of medians:
 per-step wall time, device time, where the device time goes, memory and counts.
 
-  tools/bench_pipeline.py [--cstreams build/bin/cstreams] [--shared ../shared]
+  tools/bench_pipeline.py [--cstreams build/bin/cstreams] [--data scenes/benchmarks]
                           [--device FILTER] [--repeat 11] [--out DIR] [--modes none,exact,deferred]
                           [--front-budget MB] [--solver conservative|cubic]
 """
@@ -34,7 +34,7 @@ GROUPS = [
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--cstreams", default="build/bin/cstreams")
-    ap.add_argument("--shared", default="../shared")
+    ap.add_argument("--data", default="scenes/benchmarks")
     ap.add_argument("--device", default="")
     ap.add_argument("--repeat", type=int, default=11)
     ap.add_argument("--out", default="bench-out")
@@ -47,7 +47,7 @@ def main():
           "| front pairs | MiB | tri pairs | vf+ee cand | contacts |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for scene, f0, f1 in STEPS:
-        frames = os.path.join(args.shared, "scenes-data/scalable-ccd-sample", scene, "frames")
+        frames = os.path.join(args.data, "scalable-ccd-sample", scene, "frames")
         for mode in args.modes.split(","):
             out = os.path.join(args.out, f"{scene}-{mode}-{args.solver}.json")
             cmd = [args.cstreams, "run", os.path.join(frames, f0), os.path.join(frames, f1), "--front", mode,

@@ -1,5 +1,5 @@
 #include <cstreams/contacts.hpp>
-#include <cstreams/file_output.hpp>
+#include <cstreams/io/file_output.hpp>
 
 #include <tbb/parallel_sort.h>
 

@@ -2,28 +2,8 @@
 #include <cstreams/runtime/stream_graph.hpp>
 
 #include <algorithm>
-#include <cctype>
 
 namespace cstreams::runtime {
-
-const char* to_string(Registration registration) noexcept
-{
-  switch (registration) {
-    case Registration::global_atomic: return "global-atomic";
-    case Registration::segmented_lock: return "segmented-lock";
-    case Registration::lock_free: return "lock-free";
-  }
-  return "?";
-}
-
-Registration parse_registration(std::string_view text)
-{
-  std::string t(text);
-  std::replace(t.begin(), t.end(), '_', '-');
-  for (auto r : {Registration::global_atomic, Registration::segmented_lock, Registration::lock_free})
-    if (t == to_string(r)) return r;
-  throw Error("unknown registration '" + std::string(text) + "' (global-atomic, segmented-lock or lock-free)");
-}
 
 StreamId StreamGraph::fixed(std::string name, std::size_t element_bytes, std::size_t count)
 {

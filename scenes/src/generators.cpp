@@ -1,6 +1,6 @@
 #include <cstreams/errors.hpp>
-#include <cstreams/file_output.hpp>
-#include <cstreams/mesh_io.hpp>
+#include <cstreams/io/file_output.hpp>
+#include <cstreams/io/mesh_io.hpp>
 #include <cstreams/scenes/generators.hpp>
 #include <cstreams/scenes/shapes.hpp>
 

@@ -2,7 +2,7 @@
 // valid mesh or raise InputError; nothing else (crash, hang, other exception) is allowed.
 // Build: cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DCSTREAMS_BUILD_FUZZERS=ON
 // Run:   build-fuzz/bin/fuzz_mesh_readers tests/fuzz/corpus -max_total_time=60
-#include <cstreams/mesh_io.hpp>
+#include <cstreams/io/mesh_io.hpp>
 
 #include <cstdint>
 #include <cstdlib>

@@ -1,5 +1,5 @@
-#include <cstreams/mesh_io.hpp>
-#include <cstreams/reference_ccd.hpp>
+#include <cstreams/io/mesh_io.hpp>
+#include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/shapes.hpp>
 
 #include <catch2/catch.hpp>

@@ -1,11 +1,11 @@
 // The device pipeline through the public API, against the host reference.
-#include "../support/shared_data.hpp"
+#include "../support/benchmark_data.hpp"
 #include "../support/test_device.hpp"
 
-#include <cstreams/ccd_graph.hpp>
+#include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/errors.hpp>
-#include <cstreams/reference_ccd.hpp>
+#include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/generators.hpp>
 #include <cstreams/scenes/shapes.hpp>
 
@@ -28,7 +28,7 @@ Scene generated(const std::string& name, int frames, int resolution)
 
 Scene funnel()
 {
-  const std::string dir = cstreams::test::shared_path("scenes-data/scalable-ccd-sample/cloth-funnel/frames/");
+  const std::string dir = cstreams::test::benchmark_path("scalable-ccd-sample/cloth-funnel/frames/");
   return scene_from_frames({dir + "227.ply", dir + "228.ply"});
 }
 

@@ -1,5 +1,5 @@
-#include <cstreams/mesh_io.hpp>
-#include <cstreams/scene.hpp>
+#include <cstreams/io/mesh_io.hpp>
+#include <cstreams/scene/scene.hpp>
 
 #include <catch2/catch.hpp>
 

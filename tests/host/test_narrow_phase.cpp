@@ -1,11 +1,11 @@
 // The device solvers against exact ground truth, on the device tests select
 // (CSTREAMS_DEVICE; pocl in CI).
-#include "../support/shared_data.hpp"
+#include "../support/benchmark_data.hpp"
 #include "../support/test_device.hpp"
 
-#include <cstreams/datasets.hpp>
+#include <cstreams/datasets/datasets.hpp>
 #include <cstreams/errors.hpp>
-#include <cstreams/narrow_phase.hpp>
+#include <cstreams/pipeline/narrow_phase.hpp>
 
 #include <catch2/catch.hpp>
 
@@ -163,7 +163,7 @@ Dataset transformed(const Dataset& d, double scale, double shift, std::size_t& k
   return out;
 }
 
-std::vector<Dataset> handmade() { return discover_datasets(cstreams::test::shared_path("scenes-data/sample-queries")); }
+std::vector<Dataset> handmade() { return discover_datasets(cstreams::test::benchmark_path("sample-queries")); }
 
 }  // namespace
 
@@ -241,7 +241,7 @@ TEST_CASE("a minimum separation makes near misses collide", "[narrow][quick]")
 
 TEST_CASE("the unit-test queries: conservative misses none, cubic is measured", "[narrow][quick]")
 {
-  const auto sets = discover_datasets(cstreams::test::shared_path("scenes-data/sample-queries/unit-tests"));
+  const auto sets = discover_datasets(cstreams::test::benchmark_path("sample-queries/unit-tests"));
   for (Precision p : precisions())
     for (const auto& d : sets) {
       DeviceSolver solver(cstreams::test::device(), conservative(p));
@@ -305,7 +305,7 @@ TEST_CASE("scaled and translated hand-made queries: the conservative solver miss
 TEST_CASE("real simulation steps: the conservative solver misses none and is never late", "[narrow][slow]")
 {
   for (const auto& s : cstreams::test::real_steps) {
-    const std::string folder = cstreams::test::shared_path(std::string("scenes-data/scalable-ccd-sample/") + s.scene);
+    const std::string folder = cstreams::test::benchmark_path(std::string("scalable-ccd-sample/") + s.scene);
     for (Precision p : precisions()) {
       DeviceSolver solver(cstreams::test::device(), conservative(p));
       for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) {

@@ -1,11 +1,11 @@
 // The host reference against the exact ground truth of the five real simulation steps.
-#include "../support/shared_data.hpp"
+#include "../support/benchmark_data.hpp"
 #include "../support/test_device.hpp"
 
 #include <cstreams/detector.hpp>
 
-#include <cstreams/query_io.hpp>
-#include <cstreams/reference_ccd.hpp>
+#include <cstreams/io/query_io.hpp>
+#include <cstreams/reference/reference_ccd.hpp>
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -21,7 +21,7 @@ namespace {
 
 Scene load_real(const RealStep& s)
 {
-  const std::string dir = cstreams::test::shared_path(std::string("scenes-data/scalable-ccd-sample/") + s.scene + "/frames/");
+  const std::string dir = cstreams::test::benchmark_path(std::string("scalable-ccd-sample/") + s.scene + "/frames/");
   return scene_from_frames({dir + s.frame0, dir + s.frame1});
 }
 
@@ -32,7 +32,7 @@ std::vector<std::array<std::uint64_t, 2>> boxes(const RealStep& s, const char* k
 }
 
 // The ground truth's pairs as the contacts the reference must report, using the id
-// convention of scenes-data/README.md: [vertices | edges | faces] in one index space.
+// convention of scenes/benchmarks/README.md: [vertices | edges | faces] in one index space.
 struct GroundTruth {
   std::vector<Contact> vf, ee;  // every pair marked true
   std::vector<VertexFace> vf_pairs;
@@ -145,7 +145,7 @@ TEST_CASE("queries rebuilt from frames and boxes equal every upstream query CSV"
     const Step step = load_step(scene, 0);
     const GroundTruth truth = ground_truth(s, step);
     for (const char* kind : {"vf", "ee"}) {
-      const std::string csv = std::string(CSTREAMS_SHARED_DIR) + "/scenes-data/scalable-ccd-sample/" + s.scene +
+      const std::string csv = std::string(CSTREAMS_BENCHMARK_DIR) + "/scalable-ccd-sample/" + s.scene +
                               "/queries/" + s.step + kind + ".csv";
       if (!file_exists(csv)) continue;  // absent upstream: cloth-ball, n-body ee, armadillo ee
       INFO(csv);
@@ -206,9 +206,9 @@ TEST_CASE("the host reference misses none of the hand-made degenerate queries", 
   for (const char* scene : scenes)
     for (const char* kind : {"vertex-face", "edge-edge"})
       for (const char* file : {"data_0_0.csv", "data_0_1.csv"}) {
-        const std::string path = std::string("scenes-data/sample-queries/") + scene + "/" + kind + "/" + file;
-        if (!file_exists(std::string(CSTREAMS_SHARED_DIR) + "/" + path)) continue;
-        for (const auto& q : read_queries(cstreams::test::shared_path(path))) {
+        const std::string path = std::string("sample-queries/") + scene + "/" + kind + "/" + file;
+        if (!file_exists(std::string(CSTREAMS_BENCHMARK_DIR) + "/" + path)) continue;
+        for (const auto& q : read_queries(cstreams::test::benchmark_path(path))) {
           const CcdResult r = kind[0] == 'v' ? vertex_face_reference(q.points) : edge_edge_reference(q.points);
           ++queries;
           positives += q.collides;

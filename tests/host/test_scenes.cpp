@@ -1,4 +1,4 @@
-#include <cstreams/reference_ccd.hpp>
+#include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/generators.hpp>
 
 #include <catch2/catch.hpp>

@@ -1,5 +1,5 @@
 #include <cstreams/scenes/shapes.hpp>
-#include <cstreams/topology.hpp>
+#include <cstreams/geometry/topology.hpp>
 
 #include <catch2/catch.hpp>
 

@@ -1,10 +1,10 @@
 #include "commands.hpp"
 
-#include <cstreams/datasets.hpp>
+#include <cstreams/datasets/datasets.hpp>
 #include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
-#include <cstreams/file_output.hpp>
-#include <cstreams/narrow_phase.hpp>
+#include <cstreams/io/file_output.hpp>
+#include <cstreams/pipeline/narrow_phase.hpp>
 #include <cstreams/runtime/context.hpp>
 
 #include <nlohmann/json.hpp>
@@ -126,7 +126,7 @@ void write_file(const std::string& path, const std::string& text)
 void run(const AccuracyOptions& o)
 {
   std::vector<std::string> roots = o.queries;
-  if (roots.empty()) roots.push_back(CSTREAMS_DEFAULT_SHARED_DIR);
+  if (roots.empty()) roots.push_back(CSTREAMS_DEFAULT_BENCHMARK_DIR);
   std::vector<Dataset> datasets;
   for (const auto& root : roots) {
     auto found = discover_datasets(root);
@@ -200,7 +200,7 @@ void add_accuracy_command(CLI::App& app)
                                  "Measure the elementary solvers on the device: errors against exact ground truth, and speed");
   cmd->add_option("--queries", o->queries,
                   "Query file or folder (hand-made CSVs, a simulation step, or a folder of them); default: every "
-                  "dataset in the shared data");
+                  "dataset in the benchmark data (scenes/benchmarks)");
   cmd->add_option("--solver", o->solver, "cubic, conservative or all")->check(CLI::IsMember({"cubic", "conservative", "all"}));
   cmd->add_option("--precision", o->precision, "single, double or all (double only where the device has fp64)")
       ->check(CLI::IsMember({"single", "double", "all"}));

@@ -1,5 +1,5 @@
 #pragma once
-#include <cstreams/scene.hpp>
+#include <cstreams/scene/scene.hpp>
 
 #include <CLI/CLI.hpp>
 

@@ -2,7 +2,7 @@
 
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
-#include <cstreams/file_output.hpp>
+#include <cstreams/io/file_output.hpp>
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/scenes/generators.hpp>
 
@@ -37,6 +37,7 @@ struct RunOptions {
   unsigned repeat = 1;
   std::string out;
   std::string json;
+  bool passes = false;
 };
 
 double median(std::vector<double> v)
@@ -79,6 +80,10 @@ struct Report {
   std::map<std::string, std::vector<double>> pass_ms;
   std::vector<std::string> pass_order;
   std::vector<double> host_ms, device_ms;
+  std::size_t contacts = 0, peak_bytes = 0;
+  // The step with the earliest contact of the first step that has one.
+  std::size_t first_contact_frame = 0;
+  double first_contact_toi = 2;
 };
 
 nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_ms)
@@ -104,6 +109,43 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
           {"streams", streams}};
 }
 
+// What a first run should tell: the scene, the device, the result, the cost.
+void print_summary(const Scene& scene, const runtime::Context& context, const RunOptions& o, std::size_t first,
+                   std::size_t last, const Report& report)
+{
+  std::printf("scene     %s: %zu objects, %zu faces\n", scene.name.c_str(), scene.objects.size(), scene.face_count());
+  std::printf("device    %s (%s)\n", context.device().name.c_str(), context.device().platform_name.c_str());
+  std::printf("solver    %s, %s precision, tolerance %g; front %s\n", o.solver.c_str(), o.precision.c_str(), o.tolerance,
+              o.front.c_str());
+  std::printf("steps     %zu (frames %zu to %zu)\n", last - first, first, last);
+  std::printf("contacts  %zu\n", report.contacts);
+  if (report.first_contact_toi <= 1)
+    std::printf("earliest  t = %.6g in step %zu (frame %zu to %zu)\n", report.first_contact_toi,
+                report.first_contact_frame - first + 1, report.first_contact_frame, report.first_contact_frame + 1);
+  else
+    std::printf("earliest  none: nothing collides\n");
+  std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
+              median(report.device_ms));
+  std::printf("memory    %.1f MiB on the device at most\n", double(report.peak_bytes) / (1 << 20));
+}
+
+// Per step and per pass, for --passes.
+void print_tables(Report& report)
+{
+  std::printf("\n%6s %10s %10s %10s %9s %10s %9s %9s %9s\n", "step", "tri pairs", "vf cand", "ee cand", "contacts",
+              "front", "MiB", "device ms", "step ms");
+  for (const auto& s : report.steps)
+    std::printf("%6zu %10zu %10zu %10zu %9zu %10zu %9.1f %9.3f %9.3f\n", s["frame"].get<std::size_t>(),
+                s["triangle_pairs"].get<std::size_t>(), s["vf_candidates"].get<std::size_t>(),
+                s["ee_candidates"].get<std::size_t>(), s["contacts"].get<std::size_t>(),
+                s["front_pairs"].get<std::size_t>(), s["device_bytes"].get<double>() / (1 << 20),
+                s["device_ms"].get<double>(), s["host_ms"].get<double>());
+  std::printf("\nmedian device time per pass (ms):\n");
+  for (const auto& name : report.pass_order) std::printf("  %-44s %9.3f\n", name.c_str(), median(report.pass_ms[name]));
+  std::printf("  %-44s %9.3f\n  %-44s %9.3f\n", "all passes", median(report.device_ms), "step (host wall time)",
+              median(report.host_ms));
+}
+
 void run(const RunOptions& o)
 {
   if (o.repeat == 0) throw InputError("--repeat must be at least 1");
@@ -123,7 +165,8 @@ void run(const RunOptions& o)
   runtime::Context context(o.device.empty() ? filter_from_environment() : o.device);
   Detector detector(context, describe(scene, first), options);
   const bool terminal = ::isatty(STDERR_FILENO);
-  std::fprintf(stderr, "scene %s: %zu objects, %zu faces; device %s; %s solver (%s), front %s\n", scene.name.c_str(),
+  if (terminal)
+    std::fprintf(stderr, "scene %s: %zu objects, %zu faces; device %s; %s solver (%s), front %s\n", scene.name.c_str(),
                scene.objects.size(), scene.face_count(), context.device().name.c_str(), o.solver.c_str(),
                o.precision.c_str(), o.front.c_str());
 
@@ -158,24 +201,22 @@ void run(const RunOptions& o)
     report.steps.back()["device_ms"] = device_ms;
     const auto& contacts = detector.contacts();
     all.insert(all.end(), contacts.begin(), contacts.end());
+    report.contacts += contacts.size();
+    report.peak_bytes = std::max(report.peak_bytes, stats.device_bytes());
+    if (report.first_contact_toi > 1)
+      for (const Contact& c : contacts)
+        if (c.toi < report.first_contact_toi) {
+          report.first_contact_toi = c.toi;
+          report.first_contact_frame = frame;
+        }
     if (terminal)
       std::fprintf(stderr, "\rstep %zu/%zu: %zu contacts, %.3f ms   ", frame - first + 1, last - first,
                    contacts.size(), host_ms);
   }
   if (terminal) std::fprintf(stderr, "\n");
 
-  std::printf("%6s %10s %10s %10s %9s %10s %9s %9s %9s\n", "step", "tri pairs", "vf cand", "ee cand", "contacts",
-              "front", "MiB", "device ms", "step ms");
-  for (const auto& s : report.steps)
-    std::printf("%6zu %10zu %10zu %10zu %9zu %10zu %9.1f %9.3f %9.3f\n", s["frame"].get<std::size_t>(),
-                s["triangle_pairs"].get<std::size_t>(), s["vf_candidates"].get<std::size_t>(),
-                s["ee_candidates"].get<std::size_t>(), s["contacts"].get<std::size_t>(),
-                s["front_pairs"].get<std::size_t>(), s["device_bytes"].get<double>() / (1 << 20),
-                s["device_ms"].get<double>(), s["host_ms"].get<double>());
-  std::printf("\nmedian device time per pass (ms):\n");
-  for (const auto& name : report.pass_order) std::printf("  %-44s %9.3f\n", name.c_str(), median(report.pass_ms[name]));
-  std::printf("  %-44s %9.3f\n  %-44s %9.3f\n", "all passes", median(report.device_ms), "step (host wall time)",
-              median(report.host_ms));
+  print_summary(scene, context, o, first, last, report);
+  if (o.passes) print_tables(report);
 
   if (!o.json.empty()) {
     nlohmann::json j{{"scene", scene.name},
@@ -222,6 +263,7 @@ void add_run_command(CLI::App& app)
   cmd->add_option("--repeat", o->repeat, "Run each step this many times and report medians (the first is a warm-up)");
   cmd->add_option("--out", o->out, "Write the contacts of every step, in order, as CSV");
   cmd->add_option("--json", o->json, "Write per-step statistics as JSON");
+  cmd->add_flag("--passes,-v", o->passes, "Also print a table per step and the median device time of every pass");
   cmd->callback([o] { run(*o); });
 }
 

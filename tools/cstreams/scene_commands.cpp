@@ -1,8 +1,8 @@
 #include "commands.hpp"
 
-#include <cstreams/bvh.hpp>
-#include <cstreams/reference_ccd.hpp>
-#include <cstreams/scene.hpp>
+#include <cstreams/geometry/bvh.hpp>
+#include <cstreams/reference/reference_ccd.hpp>
+#include <cstreams/scene/scene.hpp>
 #include <cstreams/scenes/generators.hpp>
 
 #include <nlohmann/json.hpp>

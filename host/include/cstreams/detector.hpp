@@ -13,10 +13,10 @@
 //     for (const cstreams::Contact& c : detector.contacts()) ...
 //   }
 #include <cstreams/contacts.hpp>
-#include <cstreams/narrow_phase.hpp>
-#include <cstreams/reference_ccd.hpp>
+#include <cstreams/pipeline/narrow_phase.hpp>
+#include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/runtime/scheduler.hpp>
-#include <cstreams/scene.hpp>
+#include <cstreams/scene/scene.hpp>
 
 #include <cstdint>
 #include <memory>

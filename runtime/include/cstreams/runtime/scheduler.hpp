@@ -1,5 +1,6 @@
 #pragma once
 #include <cstreams/runtime/buffer.hpp>
+#include <cstreams/runtime/registration.hpp>
 #include <cstreams/runtime/stream_graph.hpp>
 
 #include <cstddef>

@@ -3,19 +3,12 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
-#include <string_view>
 #include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
 
 namespace cstreams::runtime {
-
-// How a pass that emits a variable number of items writes them (registration.h).
-enum class Registration { global_atomic, segmented_lock, lock_free };
-const char* to_string(Registration registration) noexcept;
-// Accepts "global-atomic", "segmented-lock", "lock-free" (or with underscores).
-Registration parse_registration(std::string_view text);
 
 struct StreamId {
   std::uint32_t index = 0xffffffffu;

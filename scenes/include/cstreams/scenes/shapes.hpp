@@ -1,5 +1,5 @@
 #pragma once
-#include <cstreams/mesh.hpp>
+#include <cstreams/geometry/mesh.hpp>
 
 namespace cstreams::scenes {
 

@@ -1,0 +1,33 @@
+#pragma once
+#include <cstreams/geometry/bvh.hpp>
+#include <cstreams/geometry/topology.hpp>
+
+#include <array>
+#include <vector>
+
+namespace cstreams {
+
+// An 18-DOP in single precision, as the device keeps it (cl_kernels/ccd/bounds.h):
+// conservative for the exact double positions it was computed from.
+struct Kdop18f {
+  std::array<float, 9> lo;
+  std::array<float, 9> hi;
+  friend bool operator==(const Kdop18f& a, const Kdop18f& b) { return a.lo == b.lo && a.hi == b.hi; }
+  bool contains(const Kdop18& exact) const;
+  bool overlaps(const Kdop18f& other) const;
+};
+
+// Swept single-precision bounds of one mesh over a step, and its BVH's node boxes.
+struct FloatBounds {
+  std::vector<Kdop18f> faces, edges, vertices, nodes;
+};
+
+// The host's twin of the device computation (cl_kernels/ccd/bounds.cl): the same float
+// operations in the same order, so that it equals the device's boxes bit for bit.
+FloatBounds float_bounds(const Topology& topology, const Bvh& bvh, const std::vector<Vec3>& x0,
+                         const std::vector<Vec3>& x1, float separation);
+
+// Rounds positions to float (an InputError for a non-finite or out-of-range one).
+std::vector<float> to_float_positions(const std::vector<Vec3>& x);
+
+}  // namespace cstreams

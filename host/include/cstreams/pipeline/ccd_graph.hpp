@@ -1,0 +1,80 @@
+#pragma once
+// The pieces of the Detector that need no device: where each object lives in the
+// scene's device streams, the initial BVTT front, and the CCD stream graph.
+#include <cstreams/geometry/bvh.hpp>
+#include <cstreams/detector.hpp>
+#include <cstreams/runtime/stream_graph.hpp>
+#include <cstreams/geometry/topology.hpp>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace cstreams {
+
+// One object's place in the scene's streams.
+struct ObjectSlot {
+  std::uint32_t object = 0;  // index in the SceneDescription
+  bool moving = false;       // not static: refit every step
+  bool self = false;         // collides with itself
+  std::uint32_t first_vertex = 0, first_face = 0, first_edge = 0;
+  std::uint32_t first_node = 0;  // static objects: their tree's nodes start here, in tree order
+  std::int32_t root = -1;        // -1 for an object without faces
+};
+
+using NodePair = std::array<std::int32_t, 2>;
+
+// Every object's mesh and BVH in one index space: moving objects first, then static
+// ones, each in scene order, so that per-step passes cover a prefix of every stream.
+// The BVHs form one forest whose moving part is in breadth-first order across all
+// moving trees (level d of every tree, then level d + 1), so one refit pass per level
+// serves them all.
+struct SceneLayout {
+  std::vector<ObjectSlot> slots;
+  std::vector<std::uint32_t> slot_of;  // per object
+  Topology topology;                   // all objects, global ids
+  std::vector<Bvh> trees;              // per object, local ids
+  std::vector<std::array<std::int32_t, 4>> nodes;  // (first child, face, parent, depth), global ids
+  std::vector<std::uint32_t> levels;   // moving nodes of level d: [levels[d], levels[d + 1])
+  std::size_t moving_vertices = 0, moving_faces = 0, moving_edges = 0, moving_nodes = 0;
+  std::size_t depth = 0;               // deepest tree's levels
+  std::vector<NodePair> seeds;         // (root, root) of every pair of objects that may collide
+  OrphanSet orphans;                   // of self-colliding objects, global ids
+  std::vector<std::uint32_t> vertex_object;
+
+  std::size_t vertex_count() const { return topology.vertex_count; }
+  bool has_static() const { return moving_vertices < topology.vertex_count; }
+};
+
+// Checks the description (an InputError naming the object) and lays it out; each
+// tree is built over the object's starting positions.
+SceneLayout make_layout(const SceneDescription& scene, double separation);
+
+// The seeds expanded breadth first, without bounds tests, until there are at least
+// `target` pairs or only leaf pairs are left: a cut of the BVTT to start from, with
+// work for every compute unit.
+std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target);
+
+// The streams of the CCD graph; those a scene does not need stay unset.
+struct CcdStreams {
+  runtime::StreamId x0, x1, x0_double, x1_double;
+  runtime::StreamId faces, edges, nodes, face_edges, owned, vertex_object;
+  runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes;
+  runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
+  runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
+  runtime::StreamId earliest;
+  runtime::ParamId level_cap;
+  std::vector<std::pair<runtime::StreamId, ContactKind>> contacts;  // one per candidate stream
+};
+
+struct CcdGraph {
+  runtime::StreamGraph graph;
+  CcdStreams streams;
+};
+
+// The CCD stream graph of one scene: swept bounds and refit for moving objects only,
+// the front update (or search from fixed seeds), the decomposition, the orphan culls
+// for self-colliding objects, the elementary tests, and the earliest time per object.
+CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size);
+
+}  // namespace cstreams

@@ -1,0 +1,116 @@
+#include <cstreams/geometry/float_bounds.hpp>
+#include <cstreams/errors.hpp>
+#include <cstreams/pipeline/narrow_phase.hpp>
+
+#include <cfloat>
+#include <cmath>
+#include <limits>
+
+namespace cstreams {
+
+namespace {
+
+// Must match cl_kernels/ccd/bounds.h operation for operation.
+float fdown(float x) { return x - (std::fabs(x) * 0x1p-23f + FLT_MIN); }
+float fup(float x) { return x + (std::fabs(x) * 0x1p-23f + FLT_MIN); }
+
+Kdop18f empty_dop()
+{
+  Kdop18f d;
+  d.lo.fill(std::numeric_limits<float>::infinity());
+  d.hi.fill(-std::numeric_limits<float>::infinity());
+  return d;
+}
+
+void add(Kdop18f& d, float x, float y, float z)
+{
+  const float xl = fdown(x), xh = fup(x), yl = fdown(y), yh = fup(y), zl = fdown(z), zh = fup(z);
+  const float l[9] = {xl, yl, zl, fdown(xl + yl), fdown(xl - yh), fdown(yl + zl), fdown(yl - zh), fdown(zl + xl),
+                      fdown(zl - xh)};
+  const float h[9] = {xh, yh, zh, fup(xh + yh), fup(xh - yl), fup(yh + zh), fup(yh - zl), fup(zh + xh), fup(zh - xl)};
+  for (int k = 0; k < 9; ++k) {
+    d.lo[std::size_t(k)] = std::fmin(d.lo[std::size_t(k)], l[k]);
+    d.hi[std::size_t(k)] = std::fmax(d.hi[std::size_t(k)], h[k]);
+  }
+}
+
+void inflate(Kdop18f& d, float separation)
+{
+  if (separation <= 0) return;
+  const float diagonal = fup(separation * 1.41421366f);
+  for (std::size_t k = 0; k < 9; ++k) {
+    const float grow = k < 3 ? separation : diagonal;
+    d.lo[k] = fdown(d.lo[k] - grow);
+    d.hi[k] = fup(d.hi[k] + grow);
+  }
+}
+
+}  // namespace
+
+std::vector<float> to_float_positions(const std::vector<Vec3>& x)
+{
+  std::vector<float> out(3 * x.size());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      if (!std::isfinite(x[i][k]) || std::fabs(x[i][k]) > double(FLT_MAX))
+        throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
+      out[3 * i + std::size_t(k)] = static_cast<float>(x[i][k]);
+    }
+  return out;
+}
+
+namespace {
+
+Kdop18f swept(const std::vector<float>& x0, const std::vector<float>& x1, const std::uint32_t* v, int count,
+              float separation)
+{
+  Kdop18f d = empty_dop();
+  for (int i = 0; i < count; ++i) {
+    add(d, x0[3 * v[i]], x0[3 * v[i] + 1], x0[3 * v[i] + 2]);
+    add(d, x1[3 * v[i]], x1[3 * v[i] + 1], x1[3 * v[i] + 2]);
+  }
+  inflate(d, separation);
+  return d;
+}
+
+}  // namespace
+
+bool Kdop18f::contains(const Kdop18& exact) const
+{
+  for (std::size_t k = 0; k < 9; ++k)
+    if (double(lo[k]) > exact.lo[k] || double(hi[k]) < exact.hi[k]) return false;
+  return true;
+}
+
+bool Kdop18f::overlaps(const Kdop18f& o) const
+{
+  for (std::size_t k = 0; k < 9; ++k)
+    if (lo[k] > o.hi[k] || o.lo[k] > hi[k]) return false;
+  return true;
+}
+
+FloatBounds float_bounds(const Topology& t, const Bvh& bvh, const std::vector<Vec3>& x0, const std::vector<Vec3>& x1,
+                         float separation)
+{
+  const auto f0 = to_float_positions(x0), f1 = to_float_positions(x1);
+  FloatBounds b;
+  for (const Face& f : t.faces) b.faces.push_back(swept(f0, f1, f.data(), 3, separation));
+  for (const Edge& e : t.edges) b.edges.push_back(swept(f0, f1, e.data(), 2, separation));
+  for (std::uint32_t v = 0; v < t.vertex_count; ++v) b.vertices.push_back(swept(f0, f1, &v, 1, separation));
+  b.nodes.resize(bvh.nodes.size());
+  for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
+    const BvhNode& n = bvh.nodes[i];
+    if (n.left < 0) {
+      b.nodes[i] = b.faces[std::size_t(n.face)];
+      continue;
+    }
+    const Kdop18f &l = b.nodes[std::size_t(n.left)], &r = b.nodes[std::size_t(n.left) + 1];
+    for (std::size_t k = 0; k < 9; ++k) {
+      b.nodes[i].lo[k] = std::fmin(l.lo[k], r.lo[k]);
+      b.nodes[i].hi[k] = std::fmax(l.hi[k], r.hi[k]);
+    }
+  }
+  return b;
+}
+
+}  // namespace cstreams

@@ -1,0 +1,415 @@
+#include <cstreams/pipeline/ccd_graph.hpp>
+#include <cstreams/errors.hpp>
+#include <cstreams/geometry/float_bounds.hpp>
+
+#include <algorithm>
+#include <cstring>
+
+namespace cstreams {
+
+namespace {
+
+// Depth-first BVTT search holds at most 2 * depth + 1 pairs (see broad_phase.cl);
+// CS_BVTT_STACK = 128 covers trees of up to 40 levels, about 2^39 faces.
+constexpr std::size_t max_tree_depth = 40;
+
+void check_object(const ObjectDescription& o)
+{
+  const std::string what = "object '" + o.name + "': ";
+  if (o.faces.empty()) throw InputError(what + "has no faces");
+  const std::size_t n = o.positions.size();
+  for (std::size_t f = 0; f < o.faces.size(); ++f) {
+    const Face& face = o.faces[f];
+    for (std::uint32_t v : face)
+      if (v >= n)
+        throw InputError(what + "face " + std::to_string(f) + " uses vertex " + std::to_string(v) + " of " +
+                         std::to_string(n));
+    if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2])
+      throw InputError(what + "face " + std::to_string(f) + " repeats a vertex");
+  }
+  try {
+    to_float_positions(o.positions);
+  } catch (const InputError& e) {
+    throw InputError(what + e.what());
+  }
+}
+
+std::vector<std::uint32_t> node_depths(const Bvh& bvh)
+{
+  std::vector<std::uint32_t> depth(bvh.nodes.size());
+  for (std::size_t d = 0; d < bvh.depth(); ++d)
+    for (std::uint32_t i = bvh.level_offsets[d]; i < bvh.level_offsets[d + 1]; ++i) depth[i] = std::uint32_t(d);
+  return depth;
+}
+
+}  // namespace
+
+SceneLayout make_layout(const SceneDescription& scene, double separation)
+{
+  SceneLayout l;
+  const auto n = std::uint32_t(scene.objects.size());
+  for (std::uint32_t o = 0; o < n; ++o) {
+    check_object(scene.objects[o]);
+    for (std::uint32_t p = 0; p < o; ++p)
+      if (scene.objects[p].name == scene.objects[o].name)
+        throw InputError("two objects are named '" + scene.objects[o].name + "'");
+  }
+  for (const auto& [a, b] : scene.ignored_pairs)
+    if (a >= n || b >= n) throw InputError("an ignored pair names object " + std::to_string(std::max(a, b)) + " of " + std::to_string(n));
+
+  std::vector<Topology> topologies(n);
+  l.trees.resize(n);
+  for (std::uint32_t o = 0; o < n; ++o) {
+    const ObjectDescription& d = scene.objects[o];
+    topologies[o] = build_topology(d.faces, d.positions.size());
+    l.trees[o] = build_bvh(swept_bounds(topologies[o], d.positions, d.positions, separation).faces);
+    if (l.trees[o].depth() > max_tree_depth)
+      throw InputError("object '" + d.name + "': its BVH has " + std::to_string(l.trees[o].depth()) +
+                       " levels, more than the traversal's stack allows (" + std::to_string(max_tree_depth) + ")");
+    l.depth = std::max(l.depth, l.trees[o].depth());
+  }
+
+  // Slots: moving objects, then static ones.
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::uint32_t o = 0; o < n; ++o) {
+      const ObjectDescription& d = scene.objects[o];
+      const bool moving = d.kind != ObjectKind::static_;
+      if (moving != (pass == 0)) continue;
+      ObjectSlot s;
+      s.object = o;
+      s.moving = moving;
+      s.self = scene.may_collide(o, o);
+      if (!l.slots.empty()) {
+        const ObjectSlot& p = l.slots.back();
+        const Topology& pt = topologies[p.object];
+        s.first_vertex = p.first_vertex + std::uint32_t(pt.vertex_count);
+        s.first_face = p.first_face + std::uint32_t(pt.faces.size());
+        s.first_edge = p.first_edge + std::uint32_t(pt.edges.size());
+      }
+      l.slots.push_back(s);
+    }
+  l.slot_of.resize(n);
+  for (std::uint32_t i = 0; i < l.slots.size(); ++i) l.slot_of[l.slots[i].object] = i;
+
+  // The forest: moving trees interleaved level by level, then static trees whole.
+  std::vector<std::vector<std::int32_t>> global(n);
+  std::int32_t next = 0;
+  for (std::size_t d = 0;; ++d) {
+    bool any = false;
+    l.levels.push_back(std::uint32_t(next));
+    for (const ObjectSlot& s : l.slots) {
+      const Bvh& t = l.trees[s.object];
+      if (!s.moving || d >= t.depth()) continue;
+      global[s.object].resize(t.nodes.size());
+      for (std::uint32_t i = t.level_offsets[d]; i < t.level_offsets[d + 1]; ++i) global[s.object][i] = next++;
+      any = true;
+    }
+    if (!any) {
+      l.levels.pop_back();
+      break;
+    }
+  }
+  if (l.levels.size() > 0) l.levels.push_back(std::uint32_t(next));
+  l.moving_nodes = std::size_t(next);
+  for (ObjectSlot& s : l.slots) {
+    const Bvh& t = l.trees[s.object];
+    if (!s.moving) {
+      s.first_node = std::uint32_t(next);
+      global[s.object].resize(t.nodes.size());
+      for (std::size_t i = 0; i < t.nodes.size(); ++i) global[s.object][i] = next++;
+    }
+    s.root = global[s.object][0];
+  }
+  l.nodes.resize(std::size_t(next));
+  for (const ObjectSlot& s : l.slots) {
+    const Bvh& t = l.trees[s.object];
+    const auto depth = node_depths(t);
+    const auto& g = global[s.object];
+    for (std::size_t i = 0; i < t.nodes.size(); ++i) {
+      const BvhNode& node = t.nodes[i];
+      l.nodes[std::size_t(g[i])] = {node.left < 0 ? -1 : g[std::size_t(node.left)],
+                                    node.face < 0 ? -1 : node.face + std::int32_t(s.first_face),
+                                    node.parent < 0 ? -1 : g[std::size_t(node.parent)], std::int32_t(depth[i])};
+    }
+  }
+
+  // Global topology: concatenating the objects' meshes keeps each one's edge order and
+  // feature ownership, so the union's topology is theirs at offsets.
+  std::vector<Face> faces;
+  for (const ObjectSlot& s : l.slots) {
+    const Topology& t = topologies[s.object];
+    for (const Face& f : t.faces) faces.push_back({f[0] + s.first_vertex, f[1] + s.first_vertex, f[2] + s.first_vertex});
+    l.vertex_object.insert(l.vertex_object.end(), t.vertex_count, s.object);
+    if (s.moving) {
+      l.moving_vertices += t.vertex_count;
+      l.moving_faces += t.faces.size();
+      l.moving_edges += t.edges.size();
+    }
+    if (s.self) {
+      const OrphanSet orphans = build_orphans(t);
+      for (const VertexFace& p : orphans.vf) l.orphans.vf.push_back({p.vertex + s.first_vertex, p.face + s.first_face});
+      for (const EdgeEdge& p : orphans.ee) l.orphans.ee.push_back({p.a + s.first_edge, p.b + s.first_edge});
+    }
+  }
+  l.topology = build_topology(faces, l.vertex_object.size());
+
+  for (std::size_t i = 0; i < l.slots.size(); ++i)
+    for (std::size_t j = i; j < l.slots.size(); ++j)
+      if (scene.may_collide(l.slots[i].object, l.slots[j].object)) l.seeds.push_back({l.slots[i].root, l.slots[j].root});
+  return l;
+}
+
+std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target)
+{
+  // The same choices as cs_front_update, without the bounds tests.
+  std::vector<NodePair> front = layout.seeds;
+  const auto& nodes = layout.nodes;
+  while (front.size() < target) {
+    std::vector<NodePair> next;
+    bool expanded = false;
+    for (const auto& [i, j] : front) {
+      const auto &a = nodes[std::size_t(i)], &b = nodes[std::size_t(j)];
+      if (i == j) {
+        if (a[0] < 0) continue;  // a leaf against itself pairs nothing
+        next.insert(next.end(), {{a[0], a[0] + 1}, {a[0], a[0]}, {a[0] + 1, a[0] + 1}});
+      } else if (a[0] < 0 && b[0] < 0) {
+        next.push_back({i, j});
+        continue;
+      } else if (a[0] >= 0 && (b[0] < 0 || a[3] <= b[3])) {
+        next.insert(next.end(), {{a[0], j}, {a[0] + 1, j}});
+      } else {
+        next.insert(next.end(), {{i, b[0]}, {i, b[0] + 1}});
+      }
+      expanded = true;
+    }
+    front = std::move(next);
+    if (!expanded) break;
+  }
+  return front;
+}
+
+namespace {
+
+// Builds one scene's graph piece by piece; each step adds the streams and passes of
+// one stage of the pipeline and leaves those a scene does not need unset.
+struct GraphBuilder {
+  GraphBuilder(const SceneLayout& layout, const DetectorOptions& options)
+      : l(layout), solver(options.solver), options(options), t(layout.topology),
+        exact_input(solver.precision == Precision::double_), separation(float_above(solver.min_separation))
+  {
+  }
+
+  const SceneLayout& l;
+  const SolverOptions& solver;
+  const DetectorOptions& options;
+  const Topology& t;
+  const bool exact_input;
+  const float separation;
+  CcdGraph out;
+  runtime::StreamGraph& g = out.graph;
+  CcdStreams& s = out.streams;
+
+  // Expected sizes only; every variable stream grows as its counter demands.
+  std::size_t sized(std::size_t guess) const { return options.initial_capacity ? options.initial_capacity : guess; }
+
+  void geometry_streams()
+  {
+    const std::size_t nv = t.vertex_count, nf = t.faces.size(), ne = t.edges.size(), nn = l.nodes.size();
+    s.x0 = g.fixed("x0", 12, nv);
+    s.x1 = g.fixed("x1", 12, nv);
+    if (exact_input) {
+      s.x0_double = g.fixed("x0 double", 24, nv);
+      s.x1_double = g.fixed("x1 double", 24, nv);
+    }
+    s.faces = g.fixed("faces", 12, nf);
+    s.edges = g.fixed("edges", 8, ne);
+    s.nodes = g.fixed("bvh nodes", 16, nn);
+    s.face_boxes = g.fixed("face bounds", 72, nf);
+    s.edge_boxes = g.fixed("edge bounds", 72, ne);
+    s.vertex_boxes = g.fixed("vertex bounds", 72, nv);
+    s.node_boxes = g.fixed("bvh bounds", 72, nn);
+  }
+
+  // Swept bounds of the moving prefix and the refit of its trees; static objects'
+  // bounds are uploaded once.
+  void bounds_and_refit()
+  {
+    using namespace runtime;
+    if (l.moving_faces == 0) return;
+    const char* bounds = "ccd/bounds.cl";
+    auto bounds_pass = [&](const char* name, StreamId primitives, cl_uint corners, std::size_t n, StreamId boxes) {
+      g.pass(name, {bounds, "cs_primitive_bounds"})
+          .launch_items(n)
+          .write(boxes)
+          .arg(buffer_of(s.x0))
+          .arg(buffer_of(s.x1))
+          .arg(buffer_of(primitives))
+          .arg(value_of(corners))
+          .arg(value_of(cl_uint(n)))
+          .arg(value_of(separation))
+          .arg(buffer_of(boxes));
+    };
+    bounds_pass("face bounds", s.faces, 3, l.moving_faces, s.face_boxes);
+    bounds_pass("edge bounds", s.edges, 2, l.moving_edges, s.edge_boxes);
+    // A vertex is its own primitive: the kernel does not read the primitive buffer then.
+    bounds_pass("vertex bounds", s.faces, 1, l.moving_vertices, s.vertex_boxes);
+    // Deepest level first; each level reads the one below, written by the previous pass.
+    for (std::size_t level = l.levels.size() - 1; level-- > 0;) {
+      const cl_uint first = l.levels[level], count = l.levels[level + 1] - first;
+      g.pass("refit level " + std::to_string(level), {bounds, "cs_refit_level"})
+          .launch_items(count)
+          .update(s.node_boxes)
+          .read(s.face_boxes)
+          .arg(buffer_of(s.nodes))
+          .arg(buffer_of(s.face_boxes))
+          .arg(value_of(first))
+          .arg(value_of(count))
+          .arg(buffer_of(s.node_boxes));
+    }
+  }
+
+  // The front update (or search from fixed seeds) down to triangle pairs, their
+  // decomposition into feature pairs, and the culls of the orphan pairs.
+  void broad_phase(std::size_t front_size)
+  {
+    using namespace runtime;
+    const std::size_t nf = t.faces.size();
+    const char* program = "ccd/broad_phase.cl";
+    const bool keep_front = options.front != FrontMode::none;
+    // One build of the program serves all its passes.
+    const std::string front_option = "-DCS_KEEP_FRONT=" + std::to_string(int(keep_front));
+    const std::size_t guess = sized(std::max<std::size_t>(1024, nf));
+    s.face_edges = g.fixed("face edges", 12, nf);
+    s.owned = g.fixed("ownership", 4, nf);
+    if (keep_front) {
+      s.front = g.variable("front", 8, sized(std::max(front_size, 4 * nf)));
+      s.next_front = g.variable("next front", 8, sized(std::max(front_size, 4 * nf)));
+    } else {
+      s.front = g.fixed("bvtt seeds", 8, front_size);
+    }
+    s.level_cap = g.param("front level cap", 4);
+    s.triangle_pairs = g.variable("triangle pairs", 8, guess);
+    s.vf = g.variable("vf candidates", 8, guess);
+    s.ee = g.variable("ee candidates", 8, guess);
+    auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
+                       .launch_over(s.front)
+                       .read(s.node_boxes);
+    if (keep_front) update.emit(s.next_front);
+    update.emit(s.triangle_pairs)
+        .expect_items(4)
+        .arg(buffer_of(s.front))
+        .arg(count_of(s.front))
+        .arg(buffer_of(s.nodes))
+        .arg(buffer_of(s.node_boxes))
+        .arg(buffer_of(s.faces))
+        .arg(param_of(s.level_cap));
+    g.pass("decompose", {program, "cs_decompose", front_option})
+        .launch_over(s.triangle_pairs)
+        .emit(s.vf)
+        .emit(s.ee)
+        .arg(buffer_of(s.triangle_pairs))
+        .arg(count_of(s.triangle_pairs))
+        .arg(buffer_of(s.faces))
+        .arg(buffer_of(s.face_edges))
+        .arg(buffer_of(s.owned))
+        .arg(buffer_of(s.vertex_boxes))
+        .arg(buffer_of(s.edge_boxes))
+        .arg(buffer_of(s.face_boxes));
+    auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, StreamId first,
+                            StreamId second, StreamId& pairs, StreamId& kept) {
+      if (count == 0) return;
+      pairs = g.fixed(name, 8, count);
+      kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
+      g.pass(std::string("cull ") + name, {program, "cs_cull_pairs", front_option})
+          .launch_over(pairs)
+          .cull(pairs, kept)
+          .arg(buffer_of(pairs))
+          .arg(count_of(pairs))
+          .arg(buffer_of(first))
+          .arg(buffer_of(second));
+    };
+    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), s.vertex_boxes, s.face_boxes, s.orphan_vf,
+                 s.kept_vf);
+    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), s.edge_boxes, s.edge_boxes, s.orphan_ee,
+                 s.kept_ee);
+  }
+
+  // The elementary tests of every candidate stream, each emitting its contacts.
+  void elementary_tests()
+  {
+    using namespace runtime;
+    const std::string solver_options = solver_build_options(solver);
+    std::vector<std::pair<StreamId, ContactKind>> inputs{{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
+    if (s.kept_vf.index != StreamId{}.index) inputs.emplace_back(s.kept_vf, ContactKind::vertex_face);
+    if (s.kept_ee.index != StreamId{}.index) inputs.emplace_back(s.kept_ee, ContactKind::edge_edge);
+    const StreamId x0 = exact_input ? s.x0_double : s.x0, x1 = exact_input ? s.x1_double : s.x1;
+    for (const auto& [input, kind] : inputs) {
+      const std::string name = g.stream(input).name;
+      const StreamId found = g.variable("contacts from " + name, 16, sized(256));
+      auto& test = g.pass("test " + name, {"ccd/narrow_phase_pairs.cl", "cs_narrow_phase_pairs", solver_options})
+                       .launch_over(input)
+                       .emit(found)
+                       .expect_items(0.25)
+                       .arg(buffer_of(input))
+                       .arg(count_of(input))
+                       .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
+                       .arg(buffer_of(x0))
+                       .arg(buffer_of(x1))
+                       .arg(buffer_of(s.faces))
+                       .arg(buffer_of(s.edges))
+                       .arg(value_of(cl_uint(exact_input)));
+      if (exact_input) {
+        test.arg(value_of(solver.tolerance)).arg(value_of(solver.min_separation));
+      } else {
+        test.arg(value_of(float_above(solver.tolerance))).arg(value_of(separation));
+      }
+      test.arg(value_of(cl_uint(solver.max_iterations))).arg(value_of(cl_uint(solver.filter)));
+      s.contacts.emplace_back(found, kind);
+    }
+  }
+
+  // The earliest time of impact per object, by an atomic minimum over the contacts.
+  void earliest_toi()
+  {
+    using namespace runtime;
+    s.vertex_object = g.fixed("vertex objects", 4, t.vertex_count);
+    s.earliest = g.fixed("earliest toi", 4, l.slots.size());
+    const char* earliest = "ccd/earliest.cl";
+    const std::string time_options = "-DCS_REAL_DOUBLE=" + std::to_string(int(exact_input));
+    g.pass("clear earliest toi", {earliest, "cs_clear_earliest", time_options})
+        .launch_items(l.slots.size())
+        .write(s.earliest)
+        .arg(value_of(cl_uint(l.slots.size())))
+        .arg(buffer_of(s.earliest));
+    for (const auto& [found, kind] : s.contacts)
+      g.pass("earliest toi of " + g.stream(found).name.substr(std::strlen("contacts from ")),
+             {earliest, "cs_earliest_toi", time_options})
+          .launch_over(found)
+          .update(s.earliest)
+          .arg(buffer_of(found))
+          .arg(count_of(found))
+          .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
+          .arg(buffer_of(s.faces))
+          .arg(buffer_of(s.edges))
+          .arg(buffer_of(s.vertex_object))
+          .arg(buffer_of(s.earliest));
+  }
+};
+
+}  // namespace
+
+CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size)
+{
+  if (options.solver.min_separation < 0) throw InputError("the minimum separation must not be negative");
+  GraphBuilder b(layout, options);
+  b.geometry_streams();
+  b.bounds_and_refit();
+  if (!layout.seeds.empty()) {
+    b.broad_phase(front_size);
+    b.elementary_tests();
+    b.earliest_toi();
+  }
+  return std::move(b.out);
+}
+
+}  // namespace cstreams

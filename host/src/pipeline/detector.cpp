@@ -1,0 +1,247 @@
+#include "feature_ids.hpp"
+#include "front_control.hpp"
+#include "scene_upload.hpp"
+
+#include <cstreams/pipeline/ccd_graph.hpp>
+#include <cstreams/detector.hpp>
+#include <cstreams/errors.hpp>
+#include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/error.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <map>
+
+namespace cstreams {
+
+const char* to_string(FrontMode mode) noexcept
+{
+  switch (mode) {
+  case FrontMode::none: return "none";
+  case FrontMode::exact: return "exact";
+  case FrontMode::deferred: return "deferred";
+  }
+  return "?";
+}
+
+FrontMode parse_front_mode(const std::string& text)
+{
+  for (FrontMode m : {FrontMode::none, FrontMode::exact, FrontMode::deferred})
+    if (text == to_string(m)) return m;
+  throw InputError("unknown front mode '" + text + "' (none, exact or deferred)");
+}
+
+std::uint32_t SceneDescription::add(ObjectDescription object)
+{
+  objects.push_back(std::move(object));
+  return std::uint32_t(objects.size() - 1);
+}
+
+void SceneDescription::ignore(std::uint32_t a, std::uint32_t b)
+{
+  if (a == b) throw InputError("an object cannot be masked against itself; turn off its self_collision instead");
+  ignored_pairs.emplace_back(std::min(a, b), std::max(a, b));
+}
+
+bool SceneDescription::may_collide(std::uint32_t a, std::uint32_t b) const
+{
+  return objects_may_collide(a, b, objects[a].kind, objects[a].self_collision, objects[b].kind, ignored_pairs);
+}
+
+SceneDescription describe(const Scene& scene, std::size_t frame)
+{
+  SceneDescription d;
+  for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
+    const SceneObject& object = scene.objects[o];
+    d.add({object.name, object.topology.faces, scene.positions(o, frame), object.kind, object.self_collision});
+  }
+  d.ignored_pairs = scene.ignored_pairs;
+  return d;
+}
+
+std::uint64_t DetectorStats::device_ns() const
+{
+  std::uint64_t ns = 0;
+  for (const auto& p : run.passes) ns += p.device_ns;
+  return ns;
+}
+
+std::size_t DetectorStats::device_bytes() const
+{
+  std::size_t bytes = run.scratch_bytes;
+  for (const auto& s : run.streams) bytes += s.bytes;
+  return bytes;
+}
+
+namespace {
+
+using Pair = std::array<std::uint32_t, 2>;
+using Found = std::array<std::uint32_t, 4>;
+
+bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
+
+}  // namespace
+
+// What a detector holds between steps: the scene, its layout on the device, the
+// scheduler running its graph, and the last step's results.
+struct Detector::State {
+  State(runtime::Context& device, SceneDescription s, const DetectorOptions& o)
+      : scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
+        front(o, layout, 4 * device.device().compute_units * device.work_group_size()),
+        ids(layout, scene, o.solver.precision)
+  {
+    const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
+    CcdGraph g = build_ccd_graph(layout, options, seeds.size());
+    streams = g.streams;
+    scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
+                                                     runtime::SchedulerOptions{options.registration, options.profile});
+    upload_scene(*scheduler, streams, layout, scene, options.solver.min_separation);
+    if (!has(streams.front)) return;
+    front.install(*scheduler, streams, seeds);
+  }
+
+  std::size_t count(runtime::StreamId s) const { return has(s) ? scheduler->count(s) : 0; }
+
+  SceneDescription scene;
+  DetectorOptions options;
+  SceneLayout layout;
+  FrontControl front;
+  FeatureIds ids;
+  CcdStreams streams;
+  std::unique_ptr<runtime::Scheduler> scheduler;
+  std::vector<Contact> contacts;
+  bool have_contacts = false;
+  DetectorStats stats;
+};
+
+namespace {
+
+// Fails before anything is built when the device cannot run the options.
+runtime::Context& checked_device(runtime::Context& device, const DetectorOptions& options)
+{
+  if (options.solver.precision == Precision::double_ && !device.device().fp64)
+    throw InputError("device " + device.device().name + " has no double precision; use single");
+  device.programs().add_sources(ccd_kernel_sources());
+  return device;
+}
+
+}  // namespace
+
+Detector::Detector(runtime::Context& device, SceneDescription scene, DetectorOptions options)
+    : state_(std::make_unique<State>(checked_device(device, options), std::move(scene), options))
+{
+}
+
+Detector::~Detector() = default;
+
+std::uint32_t Detector::object(const std::string& name) const
+{
+  const auto& objects = state_->scene.objects;
+  for (std::uint32_t o = 0; o < objects.size(); ++o)
+    if (objects[o].name == name) return o;
+  throw InputError("no object named '" + name + "'");
+}
+
+void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
+{
+  State& s = *state_;
+  const auto f = checked_positions(s.scene, object, end);
+  write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f, end);
+}
+
+void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
+{
+  State& s = *state_;
+  const auto f0 = checked_positions(s.scene, object, start), f1 = checked_positions(s.scene, object, end);
+  write_positions(*s.scheduler, s.layout, s.streams.x0, s.streams.x0_double, object, f0, start);
+  write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f1, end);
+}
+
+void Detector::detect(Report report)
+{
+  State& s = *state_;
+  const auto started = std::chrono::steady_clock::now();
+  const CcdStreams& st = s.streams;
+  s.stats.front_retries = s.front.run(*s.scheduler, st);
+  runtime::Scheduler& q = *s.scheduler;
+  if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);
+  // The end of this step starts the next one.
+  q.copy(st.x1, 0, st.x0, 0, s.layout.moving_vertices);
+  if (has(st.x1_double)) q.copy(st.x1_double, 0, st.x0_double, 0, s.layout.moving_vertices);
+
+  s.contacts.clear();
+  s.have_contacts = report == Report::contacts;
+  if (s.have_contacts) {
+    for (const auto& [stream, kind] : st.contacts)
+      for (const Found& c : q.download<Found>(stream)) s.contacts.push_back(s.ids.contact(kind, c));
+    sort_canonical(s.contacts);
+  }
+  DetectorStats& stats = s.stats;
+  stats.run = q.stats();
+  stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
+  stats.front_level_cap = s.front.level_cap();
+  stats.triangle_pairs = s.count(st.triangle_pairs);
+  stats.vf_candidates = s.count(st.vf) + s.count(st.kept_vf);
+  stats.ee_candidates = s.count(st.ee) + s.count(st.kept_ee);
+  stats.contacts = 0;
+  for (const auto& c : st.contacts) stats.contacts += s.count(c.first);
+  stats.host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+}
+
+const std::vector<Contact>& Detector::contacts() const
+{
+  if (!state_->have_contacts) throw Error("the last step read back only the earliest times; detect(Report::contacts)");
+  return state_->contacts;
+}
+
+std::vector<double> Detector::earliest_toi() const
+{
+  const State& s = *state_;
+  std::vector<double> out(s.scene.objects.size(), 1.0);
+  if (!has(s.streams.earliest)) return out;
+  const auto bits = s.scheduler->download<std::uint32_t>(s.streams.earliest);
+  for (std::size_t o = 0; o < out.size(); ++o) {
+    float t;
+    std::memcpy(&t, &bits[o], sizeof t);
+    out[o] = t;
+  }
+  return out;
+}
+
+Candidates Detector::candidates() const
+{
+  const State& s = *state_;
+  const auto n = std::uint32_t(s.scene.objects.size());
+  std::map<std::pair<std::uint32_t, std::uint32_t>, CandidateBlock> blocks;
+  for (std::uint32_t a = 0; a < n; ++a)
+    for (std::uint32_t b = a; b < n; ++b)
+      if (s.scene.may_collide(a, b)) {
+        blocks[{a, b}] = {a, b, {}, {}};
+        blocks[{b, a}] = {b, a, {}, {}};
+      }
+  const CcdStreams& st = s.streams;
+  for (auto stream : {st.vf, st.kept_vf, st.ee, st.kept_ee}) {
+    if (!has(stream)) continue;
+    const ContactKind kind = stream == st.vf || stream == st.kept_vf ? ContactKind::vertex_face : ContactKind::edge_edge;
+    for (const Pair& p : s.scheduler->download<Pair>(stream)) {
+      const auto l = s.ids.local(kind, p[0], p[1]);
+      CandidateBlock& block = blocks.at({l.object_a, l.object_b});
+      if (kind == ContactKind::vertex_face) block.vf.push_back({l.a, l.b});
+      else block.ee.push_back({l.a, l.b});
+    }
+  }
+  Candidates out;
+  for (auto& [key, block] : blocks) {
+    std::sort(block.vf.begin(), block.vf.end());
+    std::sort(block.ee.begin(), block.ee.end());
+    out.blocks.push_back(std::move(block));
+  }
+  return out;
+}
+
+const DetectorStats& Detector::stats() const { return state_->stats; }
+const runtime::StreamGraph& Detector::graph() const { return state_->scheduler->graph(); }
+const SceneDescription& Detector::scene() const { return state_->scene; }
+
+}  // namespace cstreams

@@ -1,0 +1,38 @@
+#pragma once
+// How deep the kept front may reach. Exact and no-front modes never change it; the
+// deferred mode keeps the front within its memory budget by lowering the level cap
+// and running the step again when the front would outgrow it, and raises the cap
+// again once the front has shrunk well below the budget.
+#include <cstreams/detector.hpp>
+#include <cstreams/pipeline/ccd_graph.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace cstreams {
+
+class FrontControl {
+public:
+  FrontControl(const DetectorOptions& options, const SceneLayout& layout, std::size_t work_items);
+
+  // The pairs the first front should hold: enough work for the device, within budget.
+  std::size_t initial_target() const { return target_; }
+  // Gives a new scheduler the first front, its limits and the level cap.
+  void install(runtime::Scheduler& scheduler, const CcdStreams& streams, const std::vector<NodePair>& seeds) const;
+  // Runs the graph; returns how many runs were repeated at a coarser front.
+  unsigned run(runtime::Scheduler& scheduler, const CcdStreams& streams);
+  std::uint32_t level_cap() const { return level_cap_; }
+
+private:
+  static constexpr std::uint32_t unbounded = 0xffffffffu;
+  FrontMode mode_;
+  double budget_mb_;
+  std::uint32_t level_cap_ = unbounded;
+  std::uint32_t deepest_level_ = 0;
+  std::size_t front_limit_ = 0;
+  std::size_t target_;
+};
+
+}  // namespace cstreams

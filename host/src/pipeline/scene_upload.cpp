@@ -1,0 +1,74 @@
+#include "scene_upload.hpp"
+
+#include <cstreams/errors.hpp>
+#include <cstreams/geometry/float_bounds.hpp>
+#include <cstreams/pipeline/narrow_phase.hpp>
+
+#include <string>
+
+namespace cstreams {
+
+namespace {
+
+bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
+
+}  // namespace
+
+std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+{
+  if (o >= scene.objects.size())
+    throw InputError("no object " + std::to_string(o) + " in a scene of " + std::to_string(scene.objects.size()));
+  const ObjectDescription& d = scene.objects[o];
+  if (d.kind == ObjectKind::static_) throw InputError("object '" + d.name + "' is static and cannot move");
+  if (x.size() != d.positions.size())
+    throw InputError("object '" + d.name + "' has " + std::to_string(d.positions.size()) + " vertices, not " +
+                     std::to_string(x.size()));
+  try {
+    return to_float_positions(x);
+  } catch (const InputError& e) {
+    throw InputError("object '" + d.name + "': " + e.what());
+  }
+}
+
+void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
+                     runtime::StreamId exact, std::uint32_t o, const std::vector<float>& rounded,
+                     const std::vector<Vec3>& x)
+{
+  const std::uint32_t first = layout.slots[layout.slot_of[o]].first_vertex;
+  scheduler.write(single, first, rounded.data(), x.size());
+  if (has(exact)) scheduler.write(exact, first, x.data(), x.size());
+}
+
+void upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout& layout, const SceneDescription& scene,
+                  double min_separation)
+{
+  const Topology& t = layout.topology;
+  q.write(s.faces, 0, t.faces.data(), t.faces.size());
+  q.write(s.edges, 0, t.edges.data(), t.edges.size());
+  q.write(s.nodes, 0, layout.nodes.data(), layout.nodes.size());
+  for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
+    const ObjectDescription& object = scene.objects[o];
+    const std::vector<Vec3>& x = object.positions;
+    const auto f = to_float_positions(x);
+    write_positions(q, layout, s.x0, s.x0_double, o, f, x);
+    write_positions(q, layout, s.x1, s.x1_double, o, f, x);
+    const ObjectSlot& sl = layout.slots[layout.slot_of[o]];
+    if (sl.moving) continue;
+    // Static bounds never change: the host's float twin computes them once.
+    const FloatBounds b = float_bounds(build_topology(object.faces, x.size()), layout.trees[o], x, x,
+                                       float_above(min_separation));
+    q.write(s.face_boxes, sl.first_face, b.faces.data(), b.faces.size());
+    q.write(s.edge_boxes, sl.first_edge, b.edges.data(), b.edges.size());
+    q.write(s.vertex_boxes, sl.first_vertex, b.vertices.data(), b.vertices.size());
+    q.write(s.node_boxes, sl.first_node, b.nodes.data(), b.nodes.size());
+  }
+  if (!has(s.front)) return;
+  q.write(s.face_edges, 0, t.face_edges.data(), t.face_edges.size());
+  const std::vector<std::uint32_t> owned(t.owned.begin(), t.owned.end());
+  q.write(s.owned, 0, owned.data(), owned.size());
+  if (has(s.orphan_vf)) q.write(s.orphan_vf, 0, layout.orphans.vf.data(), layout.orphans.vf.size());
+  if (has(s.orphan_ee)) q.write(s.orphan_ee, 0, layout.orphans.ee.data(), layout.orphans.ee.size());
+  q.write(s.vertex_object, 0, layout.vertex_object.data(), layout.vertex_object.size());
+}
+
+}  // namespace cstreams

@@ -1,0 +1,27 @@
+#pragma once
+// What the host writes into a scene's streams: topology, trees and the positions the
+// scene starts from once, and each object's new positions per step.
+#include <cstreams/detector.hpp>
+#include <cstreams/pipeline/ccd_graph.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace cstreams {
+
+// Writes everything the graph reads that does not change from step to step, static
+// objects' bounds included (computed once by the host's float twin of the device).
+void upload_scene(runtime::Scheduler& scheduler, const CcdStreams& streams, const SceneLayout& layout,
+                  const SceneDescription& scene, double min_separation);
+
+// Positions of a moving object after the checks a caller's input must pass (an
+// InputError naming the object), rounded to float.
+std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
+
+// Writes one object's positions to a float stream and, in double precision, its exact twin.
+void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
+                     runtime::StreamId exact, std::uint32_t object, const std::vector<float>& rounded,
+                     const std::vector<Vec3>& x);
+
+}  // namespace cstreams
