@@ -8,13 +8,17 @@
  * values. Corners are evaluated in interval arithmetic rounded outward, so the bounds
  * hold for the exact inputs. A box is dropped when the bounds keep F away from zero
  * along the coordinate axes, along F at the box centre, or along the face (or edge
- * pair) normal; it is a contact when the bounds fit within the tolerance. Boxes are
- * searched depth first, earlier half first, pruning boxes that start after the
- * earliest contact found. The tolerance also bounds the time: boxes starting less
- * than `tolerance` before the earliest contact are not refined, and the answer is
- * then moved `tolerance` earlier, so it stays a lower bound of the first contact.
- * Running out of iterations or of stack answers "collision" at the earliest time any
- * unexplored box could hold one. */
+ * pair) normal; it is a contact when they fit within the tolerance; otherwise it is
+ * halved along the parameter F varies most with. Boxes that start after the earliest contact found are pruned. The tolerance
+ * also bounds the time: boxes starting less than `tolerance` before the earliest
+ * contact are not refined, and the answer is then moved `tolerance` earlier, so it
+ * stays a lower bound of the first contact. Running out of work answers "collision"
+ * at the earliest time any unexplored box could hold one.
+ *
+ * Two searches share the rules of one box (cs_visit_box): breadth first across a
+ * work-group (refine.cl), where the earliest contact prunes only from one round to the
+ * next, so the answer does not depend on scheduling; and depth first within one
+ * work-item (cs_conservative), the fallback for queries too wide for a work-group. */
 #include "query.h"
 
 #ifndef CS_STACK_SIZE
@@ -136,12 +140,73 @@ inline int cs_box_bounds(const cs_contact_function* f, const cs_box b, const rea
   return 1;
 }
 
+/* What the search does with one box. */
+#define CS_BOX_DROP 0  /* excluded, or pruned by the earliest contact */
+#define CS_BOX_HIT 1   /* a contact at its start (*hit) */
+#define CS_BOX_SPLIT 2 /* refined: the halves are *lo and *hi, the earlier one (for t) *lo */
+
+/* best: the earliest contact so far (2 for none). out_of_work: the query's work limit
+ * is reached, so a box that is not dropped is a contact (*limited set). *slack is set
+ * when the tolerance cut the search short. */
+inline int cs_visit_box(const cs_contact_function* f, cs_box b, const int vertex_face, const real tol, const real tolerance,
+                        const real separation, const real best, const int out_of_work, int* slack, int* limited,
+                        real* hit, cs_box* lo, cs_box* hi)
+{
+  if (b.t0 >= best) return CS_BOX_DROP;
+  if (b.t0 >= best - tolerance) {
+    *slack = 1;
+    return CS_BOX_DROP;
+  }
+  /* Only the part before best - tolerance can still matter; bounds hold for any box,
+   * so the rest is cut off rather than refined point by point along a contact line. */
+  if (b.t1 > best - tolerance) {
+    b.t1 = best - tolerance;
+    *slack = 1;
+  }
+  if (vertex_face && b.u0 + b.v0 > 1) return CS_BOX_DROP;
+  real width;
+  int axis;
+  if (!cs_box_bounds(f, b, separation, &width, &axis)) return CS_BOX_DROP;
+  *hit = b.t0;
+  if (width <= tol) return CS_BOX_HIT;
+  if (out_of_work) {
+    *limited = 1;
+    return CS_BOX_HIT;
+  }
+  *lo = b;
+  *hi = b;
+  if (axis == 0) {
+    lo->t1 = hi->t0 = (real)0.5 * (b.t0 + b.t1);
+  } else if (axis == 1) {
+    lo->u1 = hi->u0 = (real)0.5 * (b.u0 + b.u1);
+  } else {
+    lo->v1 = hi->v0 = (real)0.5 * (b.v0 + b.v1);
+  }
+  const int cannot_halve = axis == 0 ? (lo->t1 == b.t0 || hi->t0 == b.t1)
+                           : axis == 1 ? (lo->u1 == b.u0 || hi->u0 == b.u1)
+                                       : (lo->v1 == b.v0 || hi->v0 == b.v1);
+  return cannot_halve ? CS_BOX_HIT : CS_BOX_SPLIT; /* as fine as this precision goes: a contact */
+}
+
 inline real cs_query_scale(const cs_query* q)
 {
   real s = CS_TINY;
   for (int i = 0; i < 8; ++i)
     for (int k = 0; k < 3; ++k) s = fmax(s, fmax(fabs(q->x[i][k].lo), fabs(q->x[i][k].hi)));
   return s;
+}
+
+inline cs_box cs_root_box(void)
+{
+  const cs_box root = {0, 1, 0, 1, 0, 1};
+  return root;
+}
+
+/* The answer from the earliest contact found and whether the tolerance cut in. */
+inline real cs_final_time(real best, const int slack, const real tolerance)
+{
+  if (slack) best = fmax((real)0, cs_down(best - tolerance));
+  return best <= 1 ? best : 1;
 }
 
 inline uint cs_conservative(const cs_query* q, const int vertex_face, const real tolerance, const real separation,
@@ -151,57 +216,31 @@ inline uint cs_conservative(const cs_query* q, const int vertex_face, const real
   const real tol = tolerance * cs_query_scale(q);
   cs_box stack[CS_STACK_SIZE];
   int top = 0;
-  cs_box root = {0, 1, 0, 1, 0, 1};
-  stack[top++] = root;
+  stack[top++] = cs_root_box();
   real best = 2; /* no contact yet */
-  int slack_used = 0;
+  int slack = 0;
   uint status = CS_SEPARATE;
   uint iterations = 0;
   while (top > 0) {
-    cs_box b = stack[--top];
-    if (b.t0 >= best) continue;
-    if (b.t0 >= best - tolerance) {
-      slack_used = 1;
-      continue;
-    }
-    /* Only the part before best - tolerance can still matter; bounds hold for any box,
-     * so the rest is cut off rather than refined point by point along a contact line. */
-    if (b.t1 > best - tolerance) {
-      b.t1 = best - tolerance;
-      slack_used = 1;
-    }
-    if (vertex_face && b.u0 + b.v0 > 1) continue;
-    real width;
-    int axis;
-    if (!cs_box_bounds(&f, b, separation, &width, &axis)) continue;
-    if (width <= tol) {
-      best = b.t0;
-      if (status == CS_SEPARATE) status = CS_COLLIDES;
-      continue;
-    }
-    if (++iterations > max_iterations) {
-      real earliest = b.t0;
-      for (int i = 0; i < top; ++i) earliest = fmin(earliest, stack[i].t0);
-      best = fmin(best, earliest);
+    const cs_box b = stack[--top];
+    int limited = 0;
+    real hit;
+    cs_box lo, hi;
+    const int visit = cs_visit_box(&f, b, vertex_face, tol, tolerance, separation, best, iterations >= max_iterations,
+                                   &slack, &limited, &hit, &lo, &hi);
+    if (visit == CS_BOX_DROP) continue;
+    if (limited) {
+      for (int i = 0; i < top; ++i) hit = fmin(hit, stack[i].t0);
+      best = fmin(best, hit);
       status = CS_LIMIT;
       break;
     }
-    cs_box lo = b, hi = b;
-    if (axis == 0) {
-      lo.t1 = hi.t0 = (real)0.5 * (b.t0 + b.t1);
-    } else if (axis == 1) {
-      lo.u1 = hi.u0 = (real)0.5 * (b.u0 + b.u1);
-    } else {
-      lo.v1 = hi.v0 = (real)0.5 * (b.v0 + b.v1);
-    }
-    const int cannot_halve = axis == 0 ? (lo.t1 == b.t0 || hi.t0 == b.t1)
-                             : axis == 1 ? (lo.u1 == b.u0 || hi.u0 == b.u1)
-                                         : (lo.v1 == b.v0 || hi.v0 == b.v1);
-    if (cannot_halve) { /* as fine as this precision goes: a contact */
-      best = b.t0;
+    if (visit == CS_BOX_HIT) {
+      best = fmin(best, hit);
       if (status == CS_SEPARATE) status = CS_COLLIDES;
       continue;
     }
+    ++iterations;
     if (top + 2 > CS_STACK_SIZE) {
       best = fmin(best, b.t0);
       status = CS_LIMIT;
@@ -210,8 +249,7 @@ inline uint cs_conservative(const cs_query* q, const int vertex_face, const real
     stack[top++] = hi;
     stack[top++] = lo; /* the earlier half (for t splits) is searched first */
   }
-  if (slack_used) best = fmax((real)0, cs_down(best - tolerance));
-  *toi = best <= 1 ? best : 1;
+  *toi = cs_final_time(best, slack, tolerance);
   return status;
 }
 

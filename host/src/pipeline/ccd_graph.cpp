@@ -3,7 +3,6 @@
 #include <cstreams/geometry/float_bounds.hpp>
 
 #include <algorithm>
-#include <cstring>
 
 namespace cstreams {
 
@@ -188,6 +187,72 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target
   return front;
 }
 
+std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
+    runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, std::size_t refine_items,
+    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits)
+{
+  using namespace runtime;
+  const bool exact_input = solver.precision == Precision::double_;
+  const std::string options = solver_build_options(solver) + (mark_limits ? " -DCS_MARK_LIMIT=1" : "");
+  const char* screen = "ccd/narrow_phase_pairs.cl";
+  const char* refine = "ccd/refine.cl";
+  std::vector<std::pair<StreamId, ContactKind>> contacts;
+  // The arguments every test kernel starts with.
+  auto common = [&](PassSpec& pass, StreamId pairs, ContactKind kind) -> PassSpec& {
+    return pass.arg(buffer_of(pairs))
+        .arg(count_of(pairs))
+        .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
+        .arg(buffer_of(in.x0))
+        .arg(buffer_of(in.x1))
+        .arg(buffer_of(in.faces))
+        .arg(buffer_of(in.edges))
+        .arg(value_of(cl_uint(exact_input)));
+  };
+  auto real = [&](PassSpec& pass, double x) -> PassSpec& {
+    return exact_input ? pass.arg(value_of(x)) : pass.arg(value_of(float_above(x)));
+  };
+  for (const auto& [input, kind] : in.candidates) {
+    const std::string name = g.stream(input).name;
+    const StreamId found = g.variable("contacts from " + name, 16, sized(256));
+    contacts.emplace_back(found, kind);
+    if (solver.solver == Solver::cubic) {
+      auto& test = g.pass("test " + name, {screen, "cs_cubic_pairs", options}).launch_over(input).emit(found).expect_items(0.25);
+      real(real(common(test, input, kind), solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+      continue;
+    }
+    const StreamId open = g.variable("open " + name, 8, sized(1024));
+    auto& test = g.pass("test " + name, {screen, "cs_screen_pairs", options}).launch_over(input).emit(open).expect_items(0.5);
+    real(common(test, input, kind), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+    // Many queries a work-group, then one (wide), then depth first: each pass takes what
+    // the one before could not finish.
+    StreamId pending = open;
+    for (const auto& [taken, left] : {std::pair{"", "wide "}, {"wide ", "widest "}}) {
+      const bool one_slot = *taken != 0;
+      const StreamId done = one_slot ? g.variable("contacts from " + std::string(taken) + name, 16, sized(64)) : found;
+      if (one_slot) contacts.emplace_back(done, kind);
+      const StreamId wider = g.variable(left + name, 8, sized(64));
+      auto& pass = g.pass("refine " + std::string(taken) + name, {refine, "cs_refine_breadth_first", options})
+                       .launch_items(refine_items)
+                       .emit(done)
+                       .emit(wider)
+                       .expect_items(0.25);
+      real(real(common(pass, pending, kind), solver.tolerance), solver.min_separation)
+          .arg(value_of(cl_uint(solver.max_iterations)))
+          .arg(value_of(cl_uint(one_slot)));
+      pending = wider;
+    }
+    const StreamId deep = g.variable("contacts from depth-first " + name, 16, sized(64));
+    contacts.emplace_back(deep, kind);
+    auto& dfs = g.pass("refine depth-first " + name, {refine, "cs_refine_depth_first", options})
+                    .launch_over(pending)
+                    .emit(deep)
+                    .expect_items(0.5);
+    real(real(common(dfs, pending, kind), solver.tolerance), solver.min_separation)
+        .arg(value_of(cl_uint(solver.max_iterations)));
+  }
+  return contacts;
+}
+
 namespace {
 
 // Builds one scene's graph piece by piece; each step adds the streams and passes of
@@ -335,37 +400,17 @@ struct GraphBuilder {
   }
 
   // The elementary tests of every candidate stream, each emitting its contacts.
-  void elementary_tests()
+  void elementary_tests(std::size_t refine_items)
   {
-    using namespace runtime;
-    const std::string solver_options = solver_build_options(solver);
-    std::vector<std::pair<StreamId, ContactKind>> inputs{{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
-    if (s.kept_vf.index != StreamId{}.index) inputs.emplace_back(s.kept_vf, ContactKind::vertex_face);
-    if (s.kept_ee.index != StreamId{}.index) inputs.emplace_back(s.kept_ee, ContactKind::edge_edge);
-    const StreamId x0 = exact_input ? s.x0_double : s.x0, x1 = exact_input ? s.x1_double : s.x1;
-    for (const auto& [input, kind] : inputs) {
-      const std::string name = g.stream(input).name;
-      const StreamId found = g.variable("contacts from " + name, 16, sized(256));
-      auto& test = g.pass("test " + name, {"ccd/narrow_phase_pairs.cl", "cs_narrow_phase_pairs", solver_options})
-                       .launch_over(input)
-                       .emit(found)
-                       .expect_items(0.25)
-                       .arg(buffer_of(input))
-                       .arg(count_of(input))
-                       .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
-                       .arg(buffer_of(x0))
-                       .arg(buffer_of(x1))
-                       .arg(buffer_of(s.faces))
-                       .arg(buffer_of(s.edges))
-                       .arg(value_of(cl_uint(exact_input)));
-      if (exact_input) {
-        test.arg(value_of(solver.tolerance)).arg(value_of(solver.min_separation));
-      } else {
-        test.arg(value_of(float_above(solver.tolerance))).arg(value_of(separation));
-      }
-      test.arg(value_of(cl_uint(solver.max_iterations))).arg(value_of(cl_uint(solver.filter)));
-      s.contacts.emplace_back(found, kind);
-    }
+    TestInputs in;
+    in.x0 = exact_input ? s.x0_double : s.x0;
+    in.x1 = exact_input ? s.x1_double : s.x1;
+    in.faces = s.faces;
+    in.edges = s.edges;
+    in.candidates = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
+    if (s.kept_vf != runtime::StreamId{}) in.candidates.emplace_back(s.kept_vf, ContactKind::vertex_face);
+    if (s.kept_ee != runtime::StreamId{}) in.candidates.emplace_back(s.kept_ee, ContactKind::edge_edge);
+    s.contacts = add_elementary_tests(g, in, solver, refine_items, [this](std::size_t guess) { return sized(guess); });
   }
 
   // The earliest time of impact per object, by an atomic minimum over the contacts.
@@ -382,7 +427,7 @@ struct GraphBuilder {
         .arg(value_of(cl_uint(l.slots.size())))
         .arg(buffer_of(s.earliest));
     for (const auto& [found, kind] : s.contacts)
-      g.pass("earliest toi of " + g.stream(found).name.substr(std::strlen("contacts from ")),
+      g.pass("earliest toi of " + g.stream(found).name,
              {earliest, "cs_earliest_toi", time_options})
           .launch_over(found)
           .update(s.earliest)
@@ -398,7 +443,8 @@ struct GraphBuilder {
 
 }  // namespace
 
-CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size)
+CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
+                         std::size_t refine_items)
 {
   if (options.solver.min_separation < 0) throw InputError("the minimum separation must not be negative");
   GraphBuilder b(layout, options);
@@ -406,7 +452,7 @@ CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& optio
   b.bounds_and_refit();
   if (!layout.seeds.empty()) {
     b.broad_phase(front_size);
-    b.elementary_tests();
+    b.elementary_tests(refine_items);
     b.earliest_toi();
   }
   return std::move(b.out);

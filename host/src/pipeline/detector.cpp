@@ -92,7 +92,8 @@ struct Detector::State {
         ids(layout, scene, o.solver.precision)
   {
     const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
-    CcdGraph g = build_ccd_graph(layout, options, seeds.size());
+    CcdGraph g = build_ccd_graph(layout, options, seeds.size(),
+                                 8 * device.device().compute_units * device.work_group_size());
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});

@@ -1,8 +1,11 @@
 #include <cstreams/errors.hpp>
+#include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
 #include <cstreams/runtime/context.hpp>
 
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace cstreams {
@@ -48,15 +51,67 @@ float float_above(double x)
   return x > 0 ? std::nextafter(float(x), std::numeric_limits<float>::infinity()) : 0.0f;
 }
 
+// One kind's queries as the pipeline sees candidates: query i owns points 4i..4i+3;
+// a vertex-face query is the pair (vertex 4i, face i), an edge-edge one the pair
+// (edge 2i, edge 2i + 1).
+struct DeviceSolver::Graph {
+  Graph(runtime::Context& context, const SolverOptions& options, ContactKind kind) : kind(kind)
+  {
+    using namespace runtime;
+    const std::size_t real_bytes = options.precision == Precision::double_ ? 8 : 4;
+    StreamGraph g;
+    TestInputs in;
+    in.x0 = g.fixed("x0", 3 * real_bytes, 0);
+    in.x1 = g.fixed("x1", 3 * real_bytes, 0);
+    in.faces = g.fixed("faces", 12, 0);
+    in.edges = g.fixed("edges", 8, 0);
+    pairs = g.fixed("queries", 8, 0);
+    culled = g.fixed("culled by the filter", 4, 0);
+    in.candidates = {{pairs, kind}};
+    const bool exact_input = options.precision == Precision::double_;
+    auto& filter = g.pass("filter", {"ccd/narrow_phase_pairs.cl", "cs_filter_flags", solver_build_options(options)})
+                       .launch_over(pairs)
+                       .write(culled)
+                       .arg(buffer_of(pairs))
+                       .arg(count_of(pairs))
+                       .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
+                       .arg(buffer_of(in.x0))
+                       .arg(buffer_of(in.x1))
+                       .arg(buffer_of(in.faces))
+                       .arg(buffer_of(in.edges))
+                       .arg(value_of(cl_uint(exact_input)));
+    if (exact_input) filter.arg(value_of(options.min_separation));
+    else filter.arg(value_of(float_above(options.min_separation)));
+    filter.arg(value_of(cl_uint(options.filter))).arg(buffer_of(culled));
+    const std::size_t refine_items = 8 * context.device().compute_units * context.work_group_size();
+    for (const auto& c : add_elementary_tests(g, in, options, refine_items, [](std::size_t guess) { return guess; }, true))
+      contacts.push_back(c.first);
+    x0 = in.x0;
+    x1 = in.x1;
+    faces = in.faces;
+    edges = in.edges;
+    scheduler = std::make_unique<Scheduler>(context, std::move(g));
+  }
+
+  ContactKind kind;
+  runtime::StreamId x0, x1, faces, edges, pairs, culled;
+  std::vector<runtime::StreamId> contacts;
+  std::unique_ptr<runtime::Scheduler> scheduler;
+};
+
 namespace {
 
-template <class Real> void pack(const std::vector<Query>& queries, std::vector<Real>& out)
+template <class Real> void upload_points(runtime::Scheduler& s, runtime::StreamId x0, runtime::StreamId x1,
+                                         const std::vector<Query>& queries)
 {
-  out.resize(queries.size() * 24);
-  std::size_t i = 0;
+  std::vector<Real> start, end;
+  start.reserve(queries.size() * 12);
+  end.reserve(queries.size() * 12);
   for (const auto& q : queries)
-    for (const auto& p : q)
-      for (int k = 0; k < 3; ++k) out[i++] = static_cast<Real>(p[k]);  // round to nearest
+    for (int i = 0; i < 8; ++i)
+      for (int k = 0; k < 3; ++k) (i < 4 ? start : end).push_back(static_cast<Real>(q[i][k]));  // round to nearest
+  s.upload(x0, start);
+  s.upload(x1, end);
 }
 
 }  // namespace
@@ -69,7 +124,15 @@ DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& optio
   if (!(options.tolerance > 0)) throw InputError("solver tolerance must be positive");
   if (!(options.min_separation >= 0)) throw InputError("minimum separation must not be negative");
   context.programs().add_sources(ccd_kernel_sources());
-  kernel_ = context.programs().kernel("ccd/narrow_phase.cl", "cs_narrow_phase", solver_build_options(options));
+}
+
+DeviceSolver::~DeviceSolver() = default;
+
+DeviceSolver::Graph& DeviceSolver::graph(ContactKind kind)
+{
+  auto& g = graphs_[kind == ContactKind::vertex_face ? 0 : 1];
+  if (!g) g = std::make_unique<Graph>(context_, options_, kind);
+  return *g;
 }
 
 std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::vector<Query>& queries,
@@ -77,10 +140,8 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
 {
   const std::size_t n = queries.size();
   std::vector<ElementaryResult> results(n);
-  if (n == 0) {
-    if (kernel_ns) *kernel_ns = 0;
-    return results;
-  }
+  if (kernel_ns) *kernel_ns = 0;
+  if (n == 0) return results;
   const bool dp = options_.precision == Precision::double_;
   for (std::size_t i = 0; i < n; ++i)
     for (const auto& p : queries[i]) {
@@ -88,51 +149,46 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
       if (!dp && p.cwiseAbs().maxCoeff() > double(std::numeric_limits<float>::max()))
         throw InputError("query " + std::to_string(i) + " has a coordinate too large for the single-precision solver");
     }
-  const std::size_t real_bytes = dp ? 8 : 4;
-  runtime::ensure_capacity(context_, queries_, n * 24 * real_bytes, "queries");
-  runtime::ensure_capacity(context_, status_, n * 4, "query status");
-  runtime::ensure_capacity(context_, toi_, n * real_bytes, "times of impact");
-  if (dp) {
-    std::vector<double> packed;
-    pack(queries, packed);
-    context_.write(queries_, packed.data(), packed.size() * 8);
-  } else {
-    std::vector<float> packed;
-    pack(queries, packed);
-    context_.write(queries_, packed.data(), packed.size() * 4);
+  Graph& g = graph(kind);
+  runtime::Scheduler& s = *g.scheduler;
+  const auto m = std::uint32_t(n);
+  std::vector<std::array<std::uint32_t, 3>> faces(n);
+  std::vector<std::array<std::uint32_t, 2>> edges(2 * n), pairs(n);
+  for (std::uint32_t i = 0; i < m; ++i) {
+    faces[i] = {4 * i + 1, 4 * i + 2, 4 * i + 3};
+    edges[2 * i] = {4 * i, 4 * i + 1};
+    edges[2 * i + 1] = {4 * i + 2, 4 * i + 3};
+    pairs[i] = kind == ContactKind::vertex_face ? std::array<std::uint32_t, 2>{4 * i, i}
+                                                : std::array<std::uint32_t, 2>{2 * i, 2 * i + 1};
   }
-  const cl_uint exact = dp;  // doubles are the data itself; floats were rounded
-  unsigned index = 0;
-  kernel_.set_arg(index++, queries_);
-  kernel_.set_arg(index++, cl_uint(n));
-  kernel_.set_arg(index++, cl_uint(kind == ContactKind::vertex_face));
-  kernel_.set_arg(index++, exact);
-  if (dp) {
-    kernel_.set_arg(index++, options_.tolerance);
-    kernel_.set_arg(index++, options_.min_separation);
-  } else {
-    kernel_.set_arg(index++, float_above(options_.tolerance));
-    kernel_.set_arg(index++, float_above(options_.min_separation));
-  }
-  kernel_.set_arg(index++, cl_uint(options_.max_iterations));
-  kernel_.set_arg(index++, cl_uint(options_.filter));
-  kernel_.set_arg(index++, status_);
-  kernel_.set_arg(index++, toi_);
-  runtime::Timeline timeline;
-  context_.launch(kernel_, n, context_.work_group_size(), kernel_ns ? &timeline : nullptr, "narrow phase");
+  if (dp) upload_points<double>(s, g.x0, g.x1, queries);
+  else upload_points<float>(s, g.x0, g.x1, queries);
+  s.upload(g.faces, faces);
+  s.upload(g.edges, edges);
+  s.upload(g.pairs, pairs);
+  s.resize(g.culled, n);
+  s.run();
 
-  std::vector<std::uint32_t> status(n);
-  context_.read(status_, status.data(), n * 4);
-  std::vector<double> toi(n);
-  if (dp) {
-    context_.read(toi_, toi.data(), n * 8);
-  } else {
-    std::vector<float> f(n);
-    context_.read(toi_, f.data(), n * 4);
-    toi.assign(f.begin(), f.end());
-  }
-  for (std::size_t i = 0; i < n; ++i) results[i] = {QueryStatus(status[i]), toi[i]};
-  if (kernel_ns) *kernel_ns = timeline.resolve().front().nanoseconds;
+  const auto culled = s.download<std::uint32_t>(g.culled);
+  for (std::size_t i = 0; i < n; ++i)
+    if (culled[i]) results[i].status = QueryStatus::filtered;
+  for (runtime::StreamId stream : g.contacts)
+    for (const auto& c : s.download<std::array<std::uint32_t, 4>>(stream)) {
+      const std::uint32_t i = kind == ContactKind::vertex_face ? c[1] : c[0] / 2;
+      double t;
+      if (dp) {
+        const std::uint64_t bits = std::uint64_t(c[2]) | std::uint64_t(c[3]) << 32;
+        std::memcpy(&t, &bits, sizeof bits);
+      } else {
+        float f;
+        std::memcpy(&f, &c[2], sizeof f);
+        t = f;
+      }
+      // CS_MARK_LIMIT: a limit's contact carries its time negated.
+      results[i] = std::signbit(t) ? ElementaryResult{QueryStatus::limit, -t} : ElementaryResult{QueryStatus::collides, t};
+    }
+  if (kernel_ns)
+    for (const auto& p : s.stats().passes) *kernel_ns += p.device_ns;
   return results;
 }
 

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace cstreams {
@@ -67,6 +68,25 @@ struct CcdStreams {
   std::vector<std::pair<runtime::StreamId, ContactKind>> contacts;  // one per candidate stream
 };
 
+// What the elementary tests read: positions (double ones in double precision),
+// topology, and the candidate streams with their kinds.
+struct TestInputs {
+  runtime::StreamId x0, x1, faces, edges;
+  std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
+};
+
+// Adds the elementary tests of every candidate stream to a graph and returns the
+// contact streams they emit, with their kinds. The cubic solver is one pass. The
+// conservative one is a screen (the filter and the whole-domain bounds), then
+// breadth-first refinement across work-groups over `refine_items` work-items (many
+// queries a group, then one query a group for those too wide), then a depth-first
+// search for the few still too wide. `sized` gives a variable stream's first capacity
+// from a guess. With mark_limits, a contact that only a solver limit reported carries
+// its time negated (for reports that count limits).
+std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
+    runtime::StreamGraph& g, const TestInputs& inputs, const SolverOptions& solver, std::size_t refine_items,
+    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits = false);
+
 struct CcdGraph {
   runtime::StreamGraph graph;
   CcdStreams streams;
@@ -75,6 +95,9 @@ struct CcdGraph {
 // The CCD stream graph of one scene: swept bounds and refit for moving objects only,
 // the front update (or search from fixed seeds), the decomposition, the orphan culls
 // for self-colliding objects, the elementary tests, and the earliest time per object.
-CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size);
+// refine_items: the work-items of the conservative solver's refinement passes (enough
+// work-groups to fill the device).
+CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
+                         std::size_t refine_items = 1 << 14);
 
 }  // namespace cstreams

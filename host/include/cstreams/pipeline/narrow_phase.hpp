@@ -6,6 +6,7 @@
 #include <cstreams/runtime/program_registry.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -56,11 +57,15 @@ struct ElementaryResult {
   bool collides() const { return status == QueryStatus::collides || status == QueryStatus::limit; }
 };
 
-// Runs one solver over batches of queries on a device (CS_WG_SIZE work-items a group).
-// Buffers are kept and grow only.
+// Runs one solver over batches of queries on a device, through the same passes as the
+// pipeline's elementary tests (each query laid out as a candidate pair of its own).
+// Its graphs (one per kind) and buffers are kept and grow only.
 class DeviceSolver {
 public:
   DeviceSolver(runtime::Context& context, const SolverOptions& options);
+  ~DeviceSolver();
+  DeviceSolver(const DeviceSolver&) = delete;
+  DeviceSolver& operator=(const DeviceSolver&) = delete;
 
   // Uploads, solves and reads back. *kernel_ns receives the kernel's device time.
   std::vector<ElementaryResult> solve(ContactKind kind, const std::vector<Query>& queries,
@@ -68,10 +73,12 @@ public:
   const SolverOptions& options() const { return options_; }
 
 private:
+  struct Graph;
+  Graph& graph(ContactKind kind);
+
   runtime::Context& context_;
   SolverOptions options_;
-  runtime::Kernel kernel_;
-  runtime::Buffer queries_, status_, toi_;
+  std::unique_ptr<Graph> graphs_[2];
 };
 
 // Build options of the elementary-test kernels for these settings (precision, solver,

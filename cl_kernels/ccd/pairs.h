@@ -1,0 +1,61 @@
+#ifndef CSTREAMS_CCD_PAIRS_H
+#define CSTREAMS_CCD_PAIRS_H
+/* Candidate pairs of the device pipeline as queries, and contacts as they are emitted.
+ * vertex_face: a pair is (vertex, face), else (edge, edge); positions x0, x1 hold three
+ * reals a vertex. */
+#include "query.h"
+
+inline void cs_pair_points(const uint2 p, const uint vertex_face, __global const real* x0, __global const real* x1,
+                           __global const uint* faces, __global const uint* edges, real out[24])
+{
+  uint v[4];
+  if (vertex_face) {
+    v[0] = p.x;
+    v[1] = faces[3 * p.y];
+    v[2] = faces[3 * p.y + 1];
+    v[3] = faces[3 * p.y + 2];
+  } else {
+    v[0] = edges[2 * p.x];
+    v[1] = edges[2 * p.x + 1];
+    v[2] = edges[2 * p.y];
+    v[3] = edges[2 * p.y + 1];
+  }
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) {
+      out[3 * i + k] = x0[3 * v[i] + k];
+      out[12 + 3 * i + k] = x1[3 * v[i] + k];
+    }
+}
+
+/* Exact inputs are the data itself; float inputs were rounded to nearest from the
+ * caller's values, so each stands for a one-ulp interval. */
+inline cs_query cs_points_query(const real q[24], const uint exact_input)
+{
+  cs_query out;
+  for (int j = 0; j < 8; ++j)
+    for (int k = 0; k < 3; ++k) {
+      const real v = q[3 * j + k];
+      out.x[j][k] = exact_input ? cs_iv(v, v) : cs_iv(cs_down(v), cs_up(v));
+    }
+  return out;
+}
+
+/* A contact: (feature a, feature b, time bits), the time as the bits of a double (low
+ * word first) or of a float and a zero word. Built with CS_MARK_LIMIT, a contact that
+ * only a solver limit reported carries its time negated (the sign bit: times are never
+ * negative, and -0 keeps it), so a caller that counts limits can tell. */
+inline uint4 cs_contact(const uint2 p, real t, const uint status)
+{
+#if CS_MARK_LIMIT
+  if (status == CS_LIMIT) t = -t;
+#else
+  (void)status;
+#endif
+#if CS_REAL_DOUBLE
+  return (uint4)(p.x, p.y, as_uint2(t));
+#else
+  return (uint4)(p.x, p.y, as_uint(t), 0u);
+#endif
+}
+
+#endif
