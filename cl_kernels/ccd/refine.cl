@@ -8,8 +8,9 @@
  * their places for the next round. The earliest contact found in a round prunes from
  * the next round on, so a query's answer depends on nothing but the query: not on the
  * device, the group, or the queries beside it. A query whose boxes outgrow its
- * positions is emitted as unfinished and starts over where there are more (one slot a
- * group, then the depth-first search of cs_refine_depth_first); none is dropped.
+ * positions is emitted as unfinished and starts over where there are more (fewer
+ * queries a group, then one, then the depth-first search of cs_refine_depth_first);
+ * none is dropped.
  * Groups take queries group id, group id + groups, ..., so no launch size matters
  * beyond speed. */
 #include "conservative.h"
@@ -32,11 +33,12 @@ inline cs_query cs_pair_query(const uint2 p, const uint vertex_face, __global co
   return cs_points_query(q, exact_input);
 }
 
-/* one_slot: a group holds one query at a time, with every position, else CS_MAX_SLOTS. */
+/* positions: box positions a query holds (a power of two; 0 or CS_WG_SIZE and more: the
+ * whole group, one query at a time). */
 __kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n, const uint vertex_face,
                                       __global const real* x0, __global const real* x1, __global const uint* faces,
                                       __global const uint* edges, const uint exact_input, const real tolerance,
-                                      const real separation, const uint max_iterations, const uint one_slot,
+                                      const real separation, const uint max_iterations, const uint positions,
                                       CS_EMITTER_PARAMS(uint4, contacts), CS_EMITTER_PARAMS(uint2, unfinished))
 {
   __local cs_box box[CS_WG_SIZE];
@@ -49,7 +51,8 @@ __kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n,
   CS_EMITTER_BEGIN(contacts);
   CS_EMITTER_BEGIN(unfinished);
   const uint lid = get_local_id(0);
-  const uint slots = one_slot ? 1u : (uint)CS_MAX_SLOTS, cap = CS_WG_SIZE / slots;
+  const uint cap = positions == 0 || positions >= CS_WG_SIZE ? CS_WG_SIZE : max(positions, (uint)(CS_WG_SIZE / CS_MAX_SLOTS));
+  const uint slots = CS_WG_SIZE / cap;
   if (lid == 0) next_query = get_group_id(0);
   if (lid < slots) {
     query[lid] = CS_NO_QUERY;

@@ -3,6 +3,7 @@
 #include <cstreams/geometry/float_bounds.hpp>
 
 #include <algorithm>
+#include <tuple>
 
 namespace cstreams {
 
@@ -223,13 +224,14 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     const StreamId open = g.variable("open " + name, 8, sized(1024));
     auto& test = g.pass("test " + name, {screen, "cs_screen_pairs", options}).launch_over(input).emit(open).expect_items(0.5);
     real(common(test, input, kind), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
-    // Many queries a work-group, then one (wide), then depth first: each pass takes what
+    // 8 box positions a query, then 64, then the whole work-group; each pass takes what
     // the one before could not finish.
     StreamId pending = open;
-    for (const auto& [taken, left] : {std::pair{"", "wide "}, {"wide ", "widest "}}) {
-      const bool one_slot = *taken != 0;
-      const StreamId done = one_slot ? g.variable("contacts from " + std::string(taken) + name, 16, sized(64)) : found;
-      if (one_slot) contacts.emplace_back(done, kind);
+    const std::tuple<const char*, const char*, cl_uint> tiers[] = {{"", "wide ", 8}, {"wide ", "wider ", 64}, {"wider ", "widest ", 0}};
+    for (const auto& [taken, left, positions] : tiers) {
+      const bool first = *taken == 0;
+      const StreamId done = first ? found : g.variable("contacts from " + std::string(taken) + name, 16, sized(64));
+      if (!first) contacts.emplace_back(done, kind);
       const StreamId wider = g.variable(left + name, 8, sized(64));
       auto& pass = g.pass("refine " + std::string(taken) + name, {refine, "cs_refine_breadth_first", options})
                        .launch_items(refine_items)
@@ -238,7 +240,7 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
                        .expect_items(0.25);
       real(real(common(pass, pending, kind), solver.tolerance), solver.min_separation)
           .arg(value_of(cl_uint(solver.max_iterations)))
-          .arg(value_of(cl_uint(one_slot)));
+          .arg(value_of(positions));
       pending = wider;
     }
     const StreamId deep = g.variable("contacts from depth-first " + name, 16, sized(64));
