@@ -3,7 +3,7 @@
  * CS_WG_SIZE (the work-group size it launches with).
  *
  * cs_refine_breadth_first spreads each query's boxes over a work-group. The group holds
- * several queries at once, each with CS_WG_SIZE / slots box positions; a round visits
+ * several queries at once, each with a fixed number of box positions; a round visits
  * every live box with one work-item each, and the halves of the boxes refined take
  * their places for the next round. The earliest contact found in a round prunes from
  * the next round on, so a query's answer depends on nothing but the query: not on the
