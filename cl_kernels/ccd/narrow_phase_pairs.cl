@@ -44,9 +44,7 @@ __kernel void cs_screen_pairs(__global const uint2* pairs, const uint n, const u
   CS_EMITTER_BEGIN(unresolved);
   const uint i = get_global_id(0);
   if (i < n) {
-    real q[24];
-    cs_pair_points(pairs[i], vertex_face, x0, x1, faces, edges, q);
-    const cs_query query = cs_points_query(q, exact_input);
+    const cs_query query = cs_pair_query(pairs[i], vertex_face, x0, x1, faces, edges, exact_input);
     if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
       const cs_contact_function f = cs_make_contact_function(&query, (int)vertex_face);
       real width;
@@ -66,8 +64,6 @@ __kernel void cs_filter_flags(__global const uint2* pairs, const uint n, const u
 {
   const uint i = get_global_id(0);
   if (i >= n) return;
-  real q[24];
-  cs_pair_points(pairs[i], vertex_face, x0, x1, faces, edges, q);
-  const cs_query query = cs_points_query(q, exact_input);
+  const cs_query query = cs_pair_query(pairs[i], vertex_face, x0, x1, faces, edges, exact_input);
   culled[i] = (uint)cs_filtered(&query, vertex_face, use_filter, separation);
 }

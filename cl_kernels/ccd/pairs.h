@@ -40,6 +40,15 @@ inline cs_query cs_points_query(const real q[24], const uint exact_input)
   return out;
 }
 
+inline cs_query cs_pair_query(const uint2 p, const uint vertex_face, __global const real* x0,
+                              __global const real* x1, __global const uint* faces, __global const uint* edges,
+                              const uint exact_input)
+{
+  real q[24];
+  cs_pair_points(p, vertex_face, x0, x1, faces, edges, q);
+  return cs_points_query(q, exact_input);
+}
+
 /* A contact: (feature a, feature b, time bits), the time as the bits of a double (low
  * word first) or of a float and a zero word. Built with CS_MARK_LIMIT, a contact that
  * only a solver limit reported carries its time negated (the sign bit: times are never

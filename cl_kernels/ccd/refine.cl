@@ -24,15 +24,6 @@
 #define CS_FLAG_OVERFLOW 4u
 #define CS_FLAG_HIT 8u
 
-inline cs_query cs_pair_query(const uint2 p, const uint vertex_face, __global const real* x0,
-                              __global const real* x1, __global const uint* faces, __global const uint* edges,
-                              const uint exact_input)
-{
-  real q[24];
-  cs_pair_points(p, vertex_face, x0, x1, faces, edges, q);
-  return cs_points_query(q, exact_input);
-}
-
 /* positions: box positions a query holds (a power of two; 0 or CS_WG_SIZE and more: the
  * whole group, one query at a time). */
 __kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n, const uint vertex_face,

@@ -188,30 +188,39 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target
   return front;
 }
 
+runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& in, runtime::StreamId pairs,
+                                    ContactKind kind, Precision precision)
+{
+  using namespace runtime;
+  return pass.arg(buffer_of(pairs))
+      .arg(count_of(pairs))
+      .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
+      .arg(buffer_of(in.x0))
+      .arg(buffer_of(in.x1))
+      .arg(buffer_of(in.faces))
+      .arg(buffer_of(in.edges))
+      .arg(value_of(cl_uint(precision == Precision::double_)));
+}
+
+runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precision)
+{
+  using runtime::value_of;
+  return precision == Precision::double_ ? pass.arg(value_of(x)) : pass.arg(value_of(float_above(x)));
+}
+
 std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, std::size_t refine_items,
     const std::function<std::size_t(std::size_t)>& sized, bool mark_limits)
 {
   using namespace runtime;
-  const bool exact_input = solver.precision == Precision::double_;
   const std::string options = solver_build_options(solver) + (mark_limits ? " -DCS_MARK_LIMIT=1" : "");
   const char* screen = "ccd/narrow_phase_pairs.cl";
   const char* refine = "ccd/refine.cl";
   std::vector<std::pair<StreamId, ContactKind>> contacts;
-  // The arguments every test kernel starts with.
   auto common = [&](PassSpec& pass, StreamId pairs, ContactKind kind) -> PassSpec& {
-    return pass.arg(buffer_of(pairs))
-        .arg(count_of(pairs))
-        .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
-        .arg(buffer_of(in.x0))
-        .arg(buffer_of(in.x1))
-        .arg(buffer_of(in.faces))
-        .arg(buffer_of(in.edges))
-        .arg(value_of(cl_uint(exact_input)));
+    return pair_kernel_args(pass, in, pairs, kind, solver.precision);
   };
-  auto real = [&](PassSpec& pass, double x) -> PassSpec& {
-    return exact_input ? pass.arg(value_of(x)) : pass.arg(value_of(float_above(x)));
-  };
+  auto real = [&](PassSpec& pass, double x) -> PassSpec& { return real_arg(pass, x, solver.precision); };
   for (const auto& [input, kind] : in.candidates) {
     const std::string name = g.stream(input).name;
     const StreamId found = g.variable("contacts from " + name, 16, sized(256));

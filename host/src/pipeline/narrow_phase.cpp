@@ -68,21 +68,12 @@ struct DeviceSolver::Graph {
     pairs = g.fixed("queries", 8, 0);
     culled = g.fixed("culled by the filter", 4, 0);
     in.candidates = {{pairs, kind}};
-    const bool exact_input = options.precision == Precision::double_;
     auto& filter = g.pass("filter", {"ccd/narrow_phase_pairs.cl", "cs_filter_flags", solver_build_options(options)})
                        .launch_over(pairs)
-                       .write(culled)
-                       .arg(buffer_of(pairs))
-                       .arg(count_of(pairs))
-                       .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
-                       .arg(buffer_of(in.x0))
-                       .arg(buffer_of(in.x1))
-                       .arg(buffer_of(in.faces))
-                       .arg(buffer_of(in.edges))
-                       .arg(value_of(cl_uint(exact_input)));
-    if (exact_input) filter.arg(value_of(options.min_separation));
-    else filter.arg(value_of(float_above(options.min_separation)));
-    filter.arg(value_of(cl_uint(options.filter))).arg(buffer_of(culled));
+                       .write(culled);
+    real_arg(pair_kernel_args(filter, in, pairs, kind, options.precision), options.min_separation, options.precision)
+        .arg(value_of(cl_uint(options.filter)))
+        .arg(buffer_of(culled));
     const std::size_t refine_items = 8 * context.device().compute_units * context.work_group_size();
     for (const auto& c : add_elementary_tests(g, in, options, refine_items, [](std::size_t guess) { return guess; }, true))
       contacts.push_back(c.first);

@@ -75,6 +75,13 @@ struct TestInputs {
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
 };
 
+// The arguments every kernel over candidate pairs starts with (narrow_phase_pairs.cl,
+// refine.cl): the pairs, their count, their kind, positions, topology, exactness.
+runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& inputs, runtime::StreamId pairs,
+                                    ContactKind kind, Precision precision);
+// A length or tolerance as a kernel of this precision takes it: in float, rounded up.
+runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precision);
+
 // Adds the elementary tests of every candidate stream to a graph and returns the
 // contact streams they emit, with their kinds. The cubic solver is one pass. The
 // conservative one is a screen (the filter and the whole-domain bounds), then
