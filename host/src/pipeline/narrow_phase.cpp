@@ -101,8 +101,9 @@ template <class Real> void upload_points(runtime::Scheduler& s, runtime::StreamI
   for (const auto& q : queries)
     for (int i = 0; i < 8; ++i)
       for (int k = 0; k < 3; ++k) (i < 4 ? start : end).push_back(static_cast<Real>(q[i][k]));  // round to nearest
-  s.upload(x0, start);
-  s.upload(x1, end);
+  // Three reals a point.
+  s.upload(x0, start.data(), start.size() / 3);
+  s.upload(x1, end.data(), end.size() / 3);
 }
 
 }  // namespace
