@@ -46,10 +46,10 @@ __kernel void cs_screen_pairs(__global const uint2* pairs, const uint n, const u
   if (i < n) {
     const cs_query query = cs_pair_query(pairs[i], vertex_face, x0, x1, faces, edges, exact_input);
     if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
-      const cs_contact_function f = cs_make_contact_function(&query, (int)vertex_face);
+      const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
       real width;
       int axis;
-      if (cs_box_bounds(&f, cs_root_box(), separation, &width, &axis)) CS_EMIT(unresolved, pairs[i]);
+      if (cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &axis)) CS_EMIT(unresolved, pairs[i]);
     }
   }
   CS_EMITTER_END(unresolved);

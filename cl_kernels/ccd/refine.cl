@@ -34,7 +34,7 @@ __kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n,
 {
   __local cs_box box[CS_WG_SIZE];
   __local real hit[CS_WG_SIZE];
-  __local cs_contact_function function[CS_MAX_SLOTS];
+  __local cs_trilinear function[CS_MAX_SLOTS];
   __local real tol[CS_MAX_SLOTS], best[CS_MAX_SLOTS];
   __local uint query[CS_MAX_SLOTS], count[CS_MAX_SLOTS], next_count[CS_MAX_SLOTS], flags[CS_MAX_SLOTS],
       work[CS_MAX_SLOTS];
@@ -58,7 +58,7 @@ __kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n,
       if (qi < n) {
         const cs_query q = cs_pair_query(pairs[qi], vertex_face, x0, x1, faces, edges, exact_input);
         query[lid] = qi;
-        function[lid] = cs_make_contact_function(&q, (int)vertex_face);
+        function[lid] = cs_make_trilinear(&q, (int)vertex_face);
         tol[lid] = tolerance * cs_query_scale(&q);
         best[lid] = 2;
         flags[lid] = 0;
@@ -77,7 +77,7 @@ __kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n,
     int visit = CS_BOX_DROP;
     cs_box lo, hi;
     if (j < count[s]) {
-      const cs_contact_function f = function[s];
+      const cs_trilinear f = function[s];
       int slack = 0, limited = 0;
       real t;
       visit = cs_visit_box(&f, box[lid], (int)vertex_face, tol[s], tolerance, separation, best[s],

@@ -1,0 +1,144 @@
+#ifndef CSTREAMS_CCD_TRILINEAR_H
+#define CSTREAMS_CCD_TRILINEAR_H
+/* The contact function of a query as a trilinear polynomial, and cheap rigorous
+ * bounds of it over a box of parameters.
+ *
+ * Vertex-face, F = p - f0 - u (f1 - f0) - v (f2 - f0), and edge-edge,
+ * F = a0 + u (a1 - a0) - b0 - v (b1 - b0), with every point moving linearly in t, are
+ * both F(t, u, v) = A + t B + u C + t u D + v E + t v G. The six coefficients are
+ * computed once per query in interval arithmetic rounded outward (so they hold for the
+ * exact inputs) and kept as a midpoint and an error weight: the radius plus a bound
+ * on the rounding of one term (seven roundings of the evaluation, 4 CS_EPS > gamma_7).
+ * A box's corners are then evaluated in plain arithmetic, and at a corner (t, u, v)
+ * the exact F is within the same polynomial of the weights of the computed value: each
+ * corner's error scales with its own terms, as interval arithmetic's would, which
+ * matters where F passes within rounding distance of zero.
+ * F is trilinear, so over the box it lies in the hull of its corner values. This costs
+ * a fraction of evaluating the corners in interval arithmetic. */
+#include "query.h"
+
+typedef struct {
+  real t0, t1, u0, u1, v0, v1;
+} cs_box;
+
+/* c[j][k]: coefficient j (A, B, C, D, E, G) of coordinate k; w[j][k] its error weight. */
+typedef struct {
+  real c[6][3];
+  real w[6][3];
+} cs_trilinear;
+
+inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
+{
+  cs_trilinear f;
+  /* Point roles: vertex-face 0 p, 1 f0, 2 f1, 3 f2; edge-edge 0 a0, 1 a1, 2 b0, 3 b1. */
+  /* A = x_a - x_b, C = x_c0 - x_c1, E = x_e0 - x_e1 at the start; B, D, G the same of the motions. */
+  const int a = 0, b = vertex_face ? 1 : 2, c0 = 1, c1 = vertex_face ? 2 : 0, e0 = vertex_face ? 1 : 2, e1 = 3;
+  for (int k = 0; k < 3; ++k) {
+    cs_interval m[4];
+    for (int i = 0; i < 4; ++i) m[i] = cs_isub(q->x[i + 4][k], q->x[i][k]);
+    cs_interval co[6];
+    co[0] = cs_isub(q->x[a][k], q->x[b][k]);
+    co[1] = cs_isub(m[a], m[b]);
+    co[2] = cs_isub(q->x[c0][k], q->x[c1][k]);
+    co[3] = cs_isub(m[c0], m[c1]);
+    co[4] = cs_isub(q->x[e0][k], q->x[e1][k]);
+    co[5] = cs_isub(m[e0], m[e1]);
+    for (int j = 0; j < 6; ++j) {
+      const real mid = (real)0.5 * (co[j].lo + co[j].hi);
+      f.c[j][k] = mid;
+      f.w[j][k] = cs_up(cs_up(fmax(co[j].hi - mid, mid - co[j].lo)) + cs_up(fabs(mid) * (real)4 * CS_EPS));
+    }
+  }
+  return f;
+}
+
+/* Bounds F over the box. Returns 0 when F certainly stays farther than `separation`
+ * from zero there: along the coordinate axes, along F at the box centre, or along the
+ * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
+ * widest side of the bounding box of F and *split to the parameter (0 t, 1 u, 2 v)
+ * along which F varies most. */
+inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width, int* split)
+{
+  real value[8][3], error[8][3];
+  for (int c = 0; c < 8; ++c) {
+    const real t = (c & 4) ? b.t1 : b.t0, u = (c & 2) ? b.u1 : b.u0, v = (c & 1) ? b.v1 : b.v0;
+    const real tu = t * u, tv = t * v;
+    for (int k = 0; k < 3; ++k) {
+      value[c][k] = f->c[0][k] + t * f->c[1][k] + u * f->c[2][k] + tu * f->c[3][k] + v * f->c[4][k] + tv * f->c[5][k];
+      /* A sum of non-negative terms: eleven roundings at most, covered by 8 CS_EPS; and
+       * up to eleven results flushed to zero in the value and as many in the error. */
+      const real e = f->w[0][k] + t * f->w[1][k] + u * f->w[2][k] + tu * f->w[3][k] + v * f->w[4][k] + tv * f->w[5][k];
+      error[c][k] = e * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY;
+    }
+  }
+  real centre[3];
+  *width = 0;
+  for (int k = 0; k < 3; ++k) {
+    real lo = CS_REAL_MAX, hi = -CS_REAL_MAX, sum = 0;
+    for (int c = 0; c < 8; ++c) {
+      lo = fmin(lo, value[c][k] - error[c][k]);
+      hi = fmax(hi, value[c][k] + error[c][k]);
+      sum += value[c][k];
+    }
+    /* Each difference rounded to nearest: one step out covers it. */
+    lo = cs_down(lo);
+    hi = cs_up(hi);
+    if (lo > separation || hi < -separation) return 0;
+    *width = fmax(*width, hi - lo);
+    centre[k] = (real)0.125 * sum;
+  }
+
+  /* Corner c has t = c >> 2, u = (c >> 1) & 1, v = c & 1. */
+  real spread[3] = {0, 0, 0};
+  for (int c = 0; c < 8; ++c)
+    for (int axis = 0; axis < 3; ++axis) {
+      const int bit = 4 >> axis;
+      if (c & bit) continue;
+      for (int k = 0; k < 3; ++k) spread[axis] = fmax(spread[axis], fabs(value[c | bit][k] - value[c][k]));
+    }
+  *split = spread[0] >= spread[1] ? (spread[0] >= spread[2] ? 0 : 2) : (spread[1] >= spread[2] ? 1 : 2);
+
+  /* Any direction d separates rigorously when d.F is bounded away from zero at every
+   * corner. The guesses are F at the centre and the normal, (C + t D) x (E + t G) at the
+   * middle time. */
+  const real tm = (real)0.5 * (b.t0 + b.t1);
+  real e1[3], e2[3], n[3];
+  for (int k = 0; k < 3; ++k) {
+    e1[k] = f->c[2][k] + tm * f->c[3][k];
+    e2[k] = f->c[4][k] + tm * f->c[5][k];
+  }
+  n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+  n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+  n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  for (int which = 0; which < 2; ++which) {
+    real d0 = which ? n[0] : centre[0], d1 = which ? n[1] : centre[1], d2 = which ? n[2] : centre[2];
+    /* Scaled to a largest component of 1: any direction is as valid, and products with
+     * tiny directions would otherwise fall into subnormals (slow on CPUs). */
+    const real largest = fmax(fabs(d0), fmax(fabs(d1), fabs(d2)));
+    if (!(largest > CS_TINY * (real)0x1p24) || !isfinite(largest)) continue;
+    d0 /= largest;
+    d1 /= largest;
+    d2 /= largest;
+    const real a0 = fabs(d0), a1 = fabs(d1), a2 = fabs(d2);
+    const real norm1 = a0 + a1 + a2;
+    real lo = CS_REAL_MAX, hi = -CS_REAL_MAX;
+    for (int c = 0; c < 8; ++c) {
+      const real dot = d0 * value[c][0] + d1 * value[c][1] + d2 * value[c][2];
+      /* d.F at the corner differs from dot by the inputs' share, sum |d_k| error_k, and
+       * the dot product's own rounding, under 2 CS_EPS sum |d_k value_k|; the margin's
+       * own five roundings are covered by the factor. */
+      const real margin = (a0 * (error[c][0] + (real)2 * CS_EPS * fabs(value[c][0])) +
+                           a1 * (error[c][1] + (real)2 * CS_EPS * fabs(value[c][1])) +
+                           a2 * (error[c][2] + (real)2 * CS_EPS * fabs(value[c][2]))) *
+                              ((real)1 + (real)8 * CS_EPS) +
+                          (real)8 * CS_TINY;
+      lo = fmin(lo, dot - margin);
+      hi = fmax(hi, dot + margin);
+    }
+    const real reach = cs_up(separation * cs_up(norm1));
+    if (cs_down(lo) > reach || cs_up(hi) < -reach) return 0;
+  }
+  return 1;
+}
+
+#endif
