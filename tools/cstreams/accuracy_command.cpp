@@ -5,6 +5,7 @@
 #include <cstreams/errors.hpp>
 #include <cstreams/io/file_output.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
+#include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/runtime/context.hpp>
 
 #include <nlohmann/json.hpp>
@@ -123,6 +124,15 @@ void write_file(const std::string& path, const std::string& text)
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 
+void check(const AccuracyOptions& o)
+{
+  for (double tolerance : o.tolerances) check_option("--tolerance", tolerance, option_ranges::tolerance);
+  check_option("--min-separation", o.min_separation, option_ranges::min_separation);
+  check_option("--max-iterations", o.max_iterations, option_ranges::max_iterations);
+  if (!o.json.empty()) check_output_path("--json", o.json);
+  if (!o.plot.empty()) check_output_path("--plot", o.plot);
+}
+
 void run(const AccuracyOptions& o)
 {
   std::vector<std::string> roots = o.queries;
@@ -193,7 +203,7 @@ void run(const AccuracyOptions& o)
 
 }  // namespace
 
-void add_accuracy_command(CLI::App& app)
+void add_accuracy_command(CLI::App& app, Command& command)
 {
   auto o = std::make_shared<AccuracyOptions>();
   auto* cmd = app.add_subcommand("accuracy",
@@ -212,7 +222,10 @@ void add_accuracy_command(CLI::App& app)
   cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
   cmd->add_option("--json", o->json, "Write the results as JSON");
   cmd->add_option("--plot", o->plot, "Draw speed against error as a PNG (python3-matplotlib)");
-  cmd->callback([o] { run(*o); });
+  cmd->callback([o, &command] {
+    check(*o);
+    command = [o] { run(*o); };
+  });
 }
 
 }  // namespace cstreams::cli

@@ -89,14 +89,14 @@ void run(const DevicesOptions& options)
 
 }  // namespace
 
-void add_devices_command(CLI::App& app)
+void add_devices_command(CLI::App& app, Command& command)
 {
   auto options = std::make_shared<DevicesOptions>();
   auto* cmd = app.add_subcommand("devices", "List every OpenCL platform and device and the one a filter selects");
   cmd->add_flag("--json", options->json, "Print JSON instead of text");
   cmd->add_option("--device", options->filter,
                   "Device filter (default: CSTREAMS_DEVICE): pocl, nvidia, amd, gpu, cpu, P:D or a name substring");
-  cmd->callback([options] { run(*options); });
+  cmd->callback([options, &command] { command = [options] { run(*options); }; });
 }
 
 }  // namespace cstreams::cli

@@ -5,18 +5,12 @@
 
 int main(int argc, char** argv)
 {
-  CLI::App app{"cstreams: continuous collision detection between deforming triangle meshes on OpenCL devices"};
-  app.require_subcommand(1);
-  cstreams::cli::add_devices_command(app);
-  cstreams::cli::add_info_command(app);
-  cstreams::cli::add_generate_command(app);
-  cstreams::cli::add_reference_command(app);
-  cstreams::cli::add_accuracy_command(app);
-  cstreams::cli::add_run_command(app);
+  const auto cli = cstreams::cli::make_command_line();
   try {
-    app.parse(argc, argv);
+    cli->app.parse(argc, argv);
+    cli->command();
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return cli->app.exit(e);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cstreams: %s\n", e.what());
     return 1;

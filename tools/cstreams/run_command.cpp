@@ -3,6 +3,7 @@
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
 #include <cstreams/io/file_output.hpp>
+#include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/scenes/generators.hpp>
 
@@ -146,12 +147,8 @@ void print_tables(Report& report)
               median(report.host_ms));
 }
 
-void run(const RunOptions& o)
+DetectorOptions detector_options(const RunOptions& o)
 {
-  if (o.repeat == 0) throw InputError("--repeat must be at least 1");
-  const auto source = scene_source(o);
-  const Scene& scene = source->scene;
-  const auto [first, last] = step_range(o.frames, scene.frame_count());
   DetectorOptions options;
   options.solver.solver = parse_solver(o.solver);
   options.solver.precision = parse_precision(o.precision);
@@ -161,6 +158,28 @@ void run(const RunOptions& o)
   options.front = parse_front_mode(o.front);
   options.front_budget_mb = o.front_budget;
   options.registration = runtime::parse_registration(o.registration);
+  return options;
+}
+
+void check(const RunOptions& o)
+{
+  check_option("--tolerance", o.tolerance, option_ranges::tolerance);
+  check_option("--min-separation", o.min_separation, option_ranges::min_separation);
+  check_option("--max-iterations", o.max_iterations, option_ranges::max_iterations);
+  check_option("--front-budget", o.front_budget, option_ranges::front_budget_mb);
+  check_option("--repeat", o.repeat, {1, 1000000});
+  detector_options(o);
+  parse_step_range(o.frames);
+  if (!o.out.empty()) check_output_path("--out", o.out);
+  if (!o.json.empty()) check_output_path("--json", o.json);
+}
+
+void run(const RunOptions& o)
+{
+  const auto source = scene_source(o);
+  const Scene& scene = source->scene;
+  const auto [first, last] = resolve(parse_step_range(o.frames), scene.frame_count());
+  const DetectorOptions options = detector_options(o);
 
   runtime::Context context(o.device.empty() ? filter_from_environment() : o.device);
   Detector detector(context, describe(scene, first), options);
@@ -240,7 +259,7 @@ void run(const RunOptions& o)
 
 }  // namespace
 
-void add_run_command(CLI::App& app)
+void add_run_command(CLI::App& app, Command& command)
 {
   auto o = std::make_shared<RunOptions>();
   auto* cmd = app.add_subcommand(
@@ -264,7 +283,10 @@ void add_run_command(CLI::App& app)
   cmd->add_option("--out", o->out, "Write the contacts of every step, in order, as CSV");
   cmd->add_option("--json", o->json, "Write per-step statistics as JSON");
   cmd->add_flag("--passes,-v", o->passes, "Also print a table per step and the median device time of every pass");
-  cmd->callback([o] { run(*o); });
+  cmd->callback([o, &command] {
+    check(*o);
+    command = [o] { run(*o); };
+  });
 }
 
 }  // namespace cstreams::cli

@@ -1,16 +1,21 @@
 #include "commands.hpp"
 
 #include <cstreams/geometry/bvh.hpp>
+#include <cstreams/io/file_output.hpp>
+#include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scene/scene.hpp>
 #include <cstreams/scenes/generators.hpp>
 
 #include <nlohmann/json.hpp>
 
+#include <charconv>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <string_view>
 
 namespace cstreams::cli {
 
@@ -20,21 +25,34 @@ Scene open_scene(const std::vector<std::string>& paths, bool split)
   return scene_from_frames(paths, split);
 }
 
-std::pair<std::size_t, std::size_t> step_range(const std::string& text, std::size_t frame_count)
+StepRange parse_step_range(const std::string& text)
+{
+  StepRange range;
+  if (text.empty()) return range;
+  const auto number = [&](std::string_view digits, std::size_t& value) {
+    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+    return !digits.empty() && error == std::errc() && end == digits.data() + digits.size();
+  };
+  const std::string_view all(text);
+  const auto colon = all.find(':');
+  range.all = false;
+  const bool ok = colon == std::string_view::npos
+                      ? number(all, range.first) && range.first < SIZE_MAX
+                      : number(all.substr(0, colon), range.first) && number(all.substr(colon + 1), range.last);
+  if (!ok) throw InputError("--frames '" + text + "': must be A (one step) or A:B (frames A to B), whole numbers");
+  if (colon == std::string_view::npos) range.last = range.first + 1;
+  if (range.first >= range.last) throw InputError("--frames " + text + ": A:B needs A < B");
+  return range;
+}
+
+std::pair<std::size_t, std::size_t> resolve(const StepRange& range, std::size_t frame_count)
 {
   const std::size_t steps = frame_count > 1 ? frame_count - 1 : 1;
-  if (text.empty()) return {0, steps};
-  std::size_t a = 0, b = 0;
-  const auto colon = text.find(':');
-  try {
-    a = std::stoul(text.substr(0, colon));
-    b = colon == std::string::npos ? a + 1 : std::stoul(text.substr(colon + 1));
-  } catch (const std::exception&) {
-    throw InputError("--frames '" + text + "' is not A or A:B");
-  }
-  if (a >= b || b > steps)
-    throw InputError("--frames " + text + " is outside the scene's steps 0:" + std::to_string(steps));
-  return {a, b};
+  if (range.all) return {0, steps};
+  if (range.last > steps)
+    throw InputError("--frames " + std::to_string(range.first) + ":" + std::to_string(range.last) +
+                     " is outside the scene's steps 0:" + std::to_string(steps));
+  return {range.first, range.last};
 }
 
 namespace {
@@ -117,10 +135,18 @@ struct ReferenceCommandOptions {
   ReferenceSolverOptions solver;
 };
 
+void check(const ReferenceCommandOptions& o)
+{
+  check_option("--tolerance", o.solver.tolerance, option_ranges::tolerance);
+  check_option("--min-separation", o.solver.min_separation, option_ranges::min_separation);
+  parse_step_range(o.frames);
+  if (!o.out.empty()) check_output_path("--out", o.out);
+}
+
 void reference(const ReferenceCommandOptions& o)
 {
   const Scene scene = open_scene(o.paths, o.split);
-  const auto [first, last] = step_range(o.frames, scene.frame_count());
+  const auto [first, last] = resolve(parse_step_range(o.frames), scene.frame_count());
   ReferenceOptions options;
   options.solver = o.solver;
   options.broad_phase = o.brute_force ? BroadPhase::brute_force : BroadPhase::bvh;
@@ -141,7 +167,7 @@ void reference(const ReferenceCommandOptions& o)
 
 }  // namespace
 
-void add_reference_command(CLI::App& app)
+void add_reference_command(CLI::App& app, Command& command)
 {
   auto o = std::make_shared<ReferenceCommandOptions>();
   auto* cmd = app.add_subcommand("reference",
@@ -154,10 +180,13 @@ void add_reference_command(CLI::App& app)
   cmd->add_flag("--brute-force", o->brute_force, "Test every triangle pair instead of traversing BVHs");
   cmd->add_option("--tolerance", o->solver.tolerance, "Co-domain tolerance, relative to the query's coordinates");
   cmd->add_option("--min-separation", o->solver.min_separation, "Distance below which primitives count as colliding");
-  cmd->callback([o] { reference(*o); });
+  cmd->callback([o, &command] {
+    check(*o);
+    command = [o] { reference(*o); };
+  });
 }
 
-void add_info_command(CLI::App& app)
+void add_info_command(CLI::App& app, Command& command)
 {
   auto o = std::make_shared<InfoOptions>();
   auto* cmd = app.add_subcommand("info", "Describe a scene: objects, topology, orphan pairs, BVH, bounding box");
@@ -165,10 +194,10 @@ void add_info_command(CLI::App& app)
       ->required();
   cmd->add_flag("--split", o->split, "Treat each connected component of the mesh as an object");
   cmd->add_flag("--json", o->json, "Print JSON instead of a table");
-  cmd->callback([o] { info(*o); });
+  cmd->callback([o, &command] { command = [o] { info(*o); }; });
 }
 
-void add_generate_command(CLI::App& app)
+void add_generate_command(CLI::App& app, Command& command)
 {
   auto o = std::make_shared<scenes::GeneratorOptions>();
   auto* cmd = app.add_subcommand("generate", "Write a procedural scene (PLY frames and scene.json) into a folder");
@@ -177,7 +206,12 @@ void add_generate_command(CLI::App& app)
   cmd->add_option("--seed", o->seed, "Random seed (same seed, same files)");
   cmd->add_option("--frames", o->frames, "Number of frames (default: the scene's)");
   cmd->add_option("--resolution", o->resolution, "Size parameter (default: the scene's; see README)");
-  cmd->callback([o] { std::printf("%s\n", scenes::generate_scene(*o).c_str()); });
+  cmd->callback([o, &command] {
+    // Bounds that keep a typo from asking for terabytes of frames.
+    check_option("--frames", o->frames, {0, 100000});
+    check_option("--resolution", o->resolution, {0, 4096});
+    command = [o] { std::printf("%s\n", scenes::generate_scene(*o).c_str()); };
+  });
 }
 
 }  // namespace cstreams::cli

@@ -1,4 +1,5 @@
 #include <cstreams/datasets/datasets.hpp>
+#include <cstreams/io/file_input.hpp>
 #include <cstreams/io/query_io.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
 
@@ -101,8 +102,7 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
   d.name = folder.filename().string() + "/" + step;
   d.kind = kind;
   const std::string boxes_file = (folder / "boxes" / (step + kind_suffix(kind) + ".json")).string();
-  std::ifstream in(boxes_file);
-  if (!in) throw InputError(boxes_file + ": cannot open");
+  std::ifstream in = open_input(boxes_file, "candidate list");
   std::vector<std::array<std::uint64_t, 2>> boxes;
   try {
     boxes = nlohmann::json::parse(in).get<std::vector<std::array<std::uint64_t, 2>>>();
@@ -129,7 +129,7 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
   const fs::path tois = toi_folder(folder);
   const fs::path toi_file = tois / (folder.filename().string() + "_" + step + kind_suffix(kind) + "_toi.csv");
   if (!tois.empty() && fs::exists(toi_file)) {
-    std::ifstream tin(toi_file);
+    std::ifstream tin = open_input(toi_file.string(), "time-of-impact file");
     std::string line;
     std::size_t line_number = 0;
     while (std::getline(tin, line)) {

@@ -2,7 +2,9 @@
 #include <cstreams/io/file_output.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <unistd.h>
 
 namespace cstreams {
 
@@ -22,6 +24,20 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     std::remove(temporary.c_str());
     throw InputError(path + ": cannot move the written file into place");
   }
+}
+
+void check_output_path(const std::string& option, const std::string& path)
+{
+  namespace fs = std::filesystem;
+  const std::string where = option + " " + path + ": ";
+  if (path.empty()) throw InputError(option + ": empty file name");
+  std::error_code error;
+  if (fs::is_directory(path, error)) throw InputError(where + "is a folder, not a file");
+  fs::path folder = fs::path(path).parent_path();
+  if (folder.empty()) folder = ".";
+  if (!fs::exists(folder, error)) throw InputError(where + "folder " + folder.string() + " does not exist");
+  if (!fs::is_directory(folder, error)) throw InputError(where + folder.string() + " is not a folder");
+  if (::access(folder.c_str(), W_OK) != 0) throw InputError(where + "folder " + folder.string() + " is not writable");
 }
 
 }  // namespace cstreams

@@ -1,3 +1,4 @@
+#include <cstreams/io/file_input.hpp>
 #include <cstreams/io/file_output.hpp>
 #include <cstreams/io/mesh_io.hpp>
 
@@ -15,8 +16,7 @@ namespace {
 
 std::string read_file(const std::string& path)
 {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw InputError(path + ": cannot open file");
+  std::ifstream file = open_input(path, "mesh file", true);
   std::ostringstream data;
   data << file.rdbuf();
   if (file.bad()) throw InputError(path + ": read error");

@@ -1,3 +1,4 @@
+#include <cstreams/io/file_input.hpp>
 #include <cstreams/io/query_io.hpp>
 
 #include <nlohmann/json.hpp>
@@ -33,8 +34,12 @@ double exact_integer(const std::string& text, const std::string& where)
 
 std::vector<LabeledQuery> read_queries(const std::string& path)
 {
-  std::ifstream file(path);
-  if (!file) throw InputError(path + ": cannot open query file");
+  std::ifstream file = open_input(path, "query file");
+  return parse_queries(file, path);
+}
+
+std::vector<LabeledQuery> parse_queries(std::istream& file, const std::string& path)
+{
   std::vector<LabeledQuery> queries;
   std::string line;
   std::size_t line_number = 0, row = 0;
@@ -59,7 +64,9 @@ std::vector<LabeledQuery> read_queries(const std::string& path)
       const double den = exact_integer(fields[std::size_t(2 * k + 1)], where);
       if (den == 0) throw InputError(where + ": zero denominator");
       p[k] = num / den;
-      if (p[k] * den != num) throw InputError(where + ": " + fields[std::size_t(2 * k)] + "/" +
+      // The residual of the rounded quotient, computed exactly: 1/3 rounds to a double
+      // whose product with 3 rounds back to 1, so checking p * den == num would pass it.
+      if (std::fma(p[k], den, -num) != 0) throw InputError(where + ": " + fields[std::size_t(2 * k)] + "/" +
                                               fields[std::size_t(2 * k + 1)] + " is not exact in double");
     }
     q.points[row % 8] = p;
@@ -71,6 +78,7 @@ std::vector<LabeledQuery> read_queries(const std::string& path)
     }
     ++row;
   }
+  if (file.bad()) throw InputError(path + ": read error");
   if (row % 8 != 0)
     throw InputError(path + ": " + std::to_string(row) + " rows is not a whole number of 8-row queries (truncated)");
   return queries;
@@ -78,8 +86,7 @@ std::vector<LabeledQuery> read_queries(const std::string& path)
 
 std::vector<bool> read_bool_array(const std::string& path)
 {
-  std::ifstream file(path);
-  if (!file) throw InputError(path + ": cannot open file");
+  std::ifstream file = open_input(path, "JSON file");
   try {
     const auto json = nlohmann::json::parse(file);
     std::vector<bool> out;

@@ -3,6 +3,7 @@
 #include "scene_upload.hpp"
 
 #include <cstreams/pipeline/ccd_graph.hpp>
+#include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/runtime/context.hpp>
@@ -121,8 +122,8 @@ namespace {
 // Fails before anything is built when the device cannot run the options.
 runtime::Context& checked_device(runtime::Context& device, const DetectorOptions& options)
 {
-  if (options.solver.precision == Precision::double_ && !device.device().fp64)
-    throw InputError("device " + device.device().name + " has no double precision; use single");
+  check_solver_options(device, options.solver);
+  check_option("DetectorOptions::front_budget_mb", options.front_budget_mb, option_ranges::front_budget_mb);
   device.programs().add_sources(ccd_kernel_sources());
   return device;
 }

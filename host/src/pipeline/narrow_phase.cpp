@@ -1,6 +1,7 @@
 #include <cstreams/errors.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
+#include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/runtime/context.hpp>
 
 #include <array>
@@ -108,13 +109,20 @@ template <class Real> void upload_points(runtime::Scheduler& s, runtime::StreamI
 
 }  // namespace
 
+void check_solver_options(const runtime::Context& context, const SolverOptions& options)
+{
+  check_option("SolverOptions::tolerance", options.tolerance, option_ranges::tolerance);
+  check_option("SolverOptions::min_separation", options.min_separation, option_ranges::min_separation);
+  check_option("SolverOptions::max_iterations", options.max_iterations, option_ranges::max_iterations);
+  if (options.precision == Precision::double_ && !context.device().fp64)
+    throw InputError("device " + context.device().name +
+                     " has no double precision (neither cl_khr_fp64 nor cl_amd_fp64); use single precision");
+}
+
 DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& options)
     : context_(context), options_(options)
 {
-  if (options.precision == Precision::double_ && !context.device().fp64)
-    throw Error("device " + context.device().name + " has no double precision; use the single-precision solver");
-  if (!(options.tolerance > 0)) throw InputError("solver tolerance must be positive");
-  if (!(options.min_separation >= 0)) throw InputError("minimum separation must not be negative");
+  check_solver_options(context, options);
   context.programs().add_sources(ccd_kernel_sources());
 }
 

@@ -1,3 +1,4 @@
+#include <cstreams/io/file_input.hpp>
 #include <cstreams/io/mesh_io.hpp>
 #include <cstreams/scene/scene.hpp>
 
@@ -8,6 +9,7 @@
 #include <fstream>
 #include <map>
 #include <regex>
+#include <sstream>
 
 namespace cstreams {
 
@@ -169,7 +171,10 @@ std::vector<std::string> frame_list(const nlohmann::json& frames, const std::str
     if (!std::regex_match(pattern, one_integer))
       throw InputError(where + ": \"pattern\" must hold exactly one integer field such as %d or %03d");
     const long first = frames.value("first", 0L), count = frames.value("count", -1L);
-    if (count <= 0) throw InputError(where + ": \"count\" must be a positive number of frames");
+    // Bounded so that first + count - 1 stays an int, and a typo cannot ask for 10^15 files.
+    if (count <= 0 || count > 1000000)
+      throw InputError(where + ": \"count\" must be a number of frames from 1 to 1000000");
+    if (first < 0 || first > 1000000000) throw InputError(where + ": \"first\" must be from 0 to 1000000000");
     for (long i = first; i < first + count; ++i) {
       char name[4096];
       std::snprintf(name, sizeof name, pattern.c_str(), int(i));
@@ -206,11 +211,18 @@ Scene load_scene(const std::string& path)
     scene.objects[0].kind = ObjectKind::static_;
     return scene;
   }
-  std::ifstream file(path);
-  if (!file) throw InputError(path + ": cannot open scene manifest");
+  std::ifstream file = open_input(path, "scene manifest");
+  std::ostringstream text;
+  text << file.rdbuf();
+  if (file.bad()) throw InputError(path + ": read error");
+  return parse_scene_manifest(text.str(), path);
+}
+
+Scene parse_scene_manifest(const std::string& text, const std::string& path)
+{
   nlohmann::json manifest;
   try {
-    manifest = nlohmann::json::parse(file);
+    manifest = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path + ": not valid JSON: " + e.what());
   }

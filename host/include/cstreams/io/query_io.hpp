@@ -2,6 +2,7 @@
 #include <cstreams/errors.hpp>
 #include <cstreams/reference/reference_solver.hpp>
 
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,8 @@ struct LabeledQuery {
 // of two), so num / den is exact, and anything that is not is rejected. Without a
 // truth column `collides` is false; the caller supplies the truth (mma_bool).
 std::vector<LabeledQuery> read_queries(const std::string& path);
+// The same from a stream; `name` names it in errors.
+std::vector<LabeledQuery> parse_queries(std::istream& in, const std::string& name);
 
 // Reads a JSON array of booleans (the mma_bool ground-truth files).
 std::vector<bool> read_bool_array(const std::string& path);

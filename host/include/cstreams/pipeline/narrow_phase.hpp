@@ -44,6 +44,10 @@ struct SolverOptions {
   bool filter = true;
 };
 
+// Throws InputError naming the first option out of range (option_checks.hpp), or the
+// device's missing double precision.
+void check_solver_options(const runtime::Context& context, const SolverOptions& options);
+
 enum class QueryStatus : std::uint32_t {
   separate = 0,  // no contact in [0, 1]
   collides = 1,

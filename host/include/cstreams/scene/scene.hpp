@@ -13,6 +13,7 @@ namespace cstreams {
 
 class Scene;
 Scene load_scene(const std::string& path);
+Scene parse_scene_manifest(const std::string& text, const std::string& path);
 Scene scene_from_frames(const std::vector<std::string>& frame_files, bool split);
 
 enum class ObjectKind {
@@ -69,7 +70,7 @@ public:
   struct Cache;  // frames read so far; opaque
 
 private:
-  friend Scene load_scene(const std::string& path);
+  friend Scene parse_scene_manifest(const std::string& text, const std::string& path);
   friend Scene scene_from_frames(const std::vector<std::string>& frame_files, bool split);
   std::unique_ptr<Cache> cache_;
 };
@@ -77,6 +78,10 @@ private:
 // Reads a scene: a JSON manifest (.json, format in README.md) or one mesh file (.ply
 // or .obj, a single static frame).
 Scene load_scene(const std::string& path);
+
+// A manifest's text, as if read from `path` (which names it in errors and is where its
+// relative frame paths start).
+Scene parse_scene_manifest(const std::string& text, const std::string& path);
 
 // A sequence of frames of one mesh, as the UNC benchmarks come: one deformable object
 // with self-collision, or with `split` one object per connected component, all

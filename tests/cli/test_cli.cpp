@@ -1,0 +1,121 @@
+// The command line's parsing phase: every bad flag is refused, naming it, before any
+// scene is read, device opened or file written.
+#include "../support/benchmark_data.hpp"
+
+#include <commands.hpp>
+#include <cstreams/errors.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Parses `args` (after the program name); returns the error text, empty if accepted.
+// `ran` tells whether a command was produced.
+std::string parse(std::vector<std::string> args, bool* ran = nullptr)
+{
+  auto cli = cstreams::cli::make_command_line();
+  args.insert(args.begin(), "cstreams");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  std::string error;
+  try {
+    cli->app.parse(int(argv.size()), argv.data());
+  } catch (const CLI::ParseError& e) {
+    error = e.get_name() + ": " + e.what();
+  } catch (const cstreams::InputError& e) {
+    error = e.what();
+  }
+  if (ran) *ran = bool(cli->command);
+  if (error.empty() && !cli->command) error = "no command";
+  return error;
+}
+
+std::string funnel_frame(const char* name)
+{
+  return cstreams::test::benchmark_path(std::string("scalable-ccd-sample/cloth-funnel/frames/") + name);
+}
+
+}  // namespace
+
+TEST_CASE("numeric flags out of range are refused before any work, naming the flag and the range", "[cli][quick]")
+{
+  const std::vector<std::string> scene{funnel_frame("227.ply"), funnel_frame("228.ply")};
+  const auto run = [&](std::vector<std::string> flags) {
+    std::vector<std::string> args{"run"};
+    args.insert(args.end(), scene.begin(), scene.end());
+    args.insert(args.end(), flags.begin(), flags.end());
+    bool ran = true;
+    const std::string error = parse(args, &ran);
+    CHECK(!ran);
+    return error;
+  };
+  CHECK(run({"--tolerance", "-1"}) == "--tolerance = -1: must be a finite number in (0, 1]");
+  CHECK(run({"--tolerance", "nan"}) == "--tolerance = nan: must be a finite number in (0, 1]");
+  CHECK(run({"--tolerance", "inf"}) == "--tolerance = inf: must be a finite number in (0, 1]");
+  CHECK(run({"--min-separation", "-0.5"}) == "--min-separation = -0.5: must be a finite number in [0, 1e+30]");
+  CHECK(run({"--max-iterations", "0"}) == "--max-iterations = 0: must be a finite number in [1, 4294967295]");
+  CHECK_THAT(run({"--max-iterations", "-1"}), Catch::Contains("--max-iterations"));
+  CHECK_THAT(run({"--max-iterations", "4294967296"}), Catch::Contains("--max-iterations"));
+  CHECK_THAT(run({"--front-budget", "0"}), Catch::StartsWith("--front-budget = 0: must be"));
+  CHECK_THAT(run({"--repeat", "0"}), Catch::StartsWith("--repeat = 0: must be"));
+  CHECK_THAT(run({"--frames", "3abc"}), Catch::StartsWith("--frames '3abc': must be A"));
+  CHECK_THAT(run({"--frames", "2:1"}), Catch::Contains("needs A < B"));
+  CHECK_THAT(run({"--frames", ":"}), Catch::StartsWith("--frames ':'"));
+  CHECK_THAT(run({"--solver", "fast"}), Catch::Contains("unknown solver 'fast'"));
+  CHECK_THAT(run({"--front", "x"}), Catch::Contains("unknown front mode 'x'"));
+
+  bool ran = false;
+  CHECK(parse({"accuracy", "--tolerance", "1e-6", "--tolerance", "-2"}, &ran) ==
+        "--tolerance = -2: must be a finite number in (0, 1]");
+  CHECK(!ran);
+  CHECK_THAT(parse({"reference", scene[0], "--tolerance", "nan"}), Catch::StartsWith("--tolerance = nan"));
+  CHECK_THAT(parse({"generate", "cloth-sphere", "--out", "/tmp/x", "--resolution", "100000"}),
+             Catch::StartsWith("--resolution = 100000: must be"));
+  CHECK_THAT(parse({"generate", "cloth-sphere", "--out", "/tmp/x", "--frames", "-3"}),
+             Catch::StartsWith("--frames = -3: must be"));
+}
+
+TEST_CASE("output paths are checked when the command line is read", "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-outputs";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string mesh = funnel_frame("227.ply");
+  bool ran = true;
+  CHECK(parse({"run", mesh, "--out", "/nonexistent/dir/c.csv"}, &ran) ==
+        "--out /nonexistent/dir/c.csv: folder /nonexistent/dir does not exist");
+  CHECK(!ran);
+  CHECK_THAT(parse({"run", mesh, "--json", dir.string()}), Catch::EndsWith("is a folder, not a file"));
+  CHECK_THAT(parse({"accuracy", "--plot", "/nonexistent/p.png"}), Catch::StartsWith("--plot /nonexistent/p.png"));
+  CHECK_THAT(parse({"reference", mesh, "--out", "/nonexistent/r.csv"}), Catch::StartsWith("--out /nonexistent"));
+  CHECK(parse({"run", mesh, "--out", (dir / "c.csv").string(), "--json", (dir / "s.json").string()}, &ran).empty());
+  CHECK(ran);
+  CHECK(fs::is_empty(dir));  // parsing wrote nothing
+}
+
+TEST_CASE("a run writes its contacts and statistics whole", "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-run";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  auto cli = cstreams::cli::make_command_line();
+  std::vector<std::string> args{"cstreams", "run", funnel_frame("227.ply"), funnel_frame("228.ply"),
+                                "--out", (dir / "c.csv").string(), "--json", (dir / "s.json").string()};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  cli->app.parse(int(argv.size()), argv.data());
+  cli->command();
+  std::ifstream csv(dir / "c.csv");
+  std::size_t lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  CHECK(lines > 1);  // a header and the step's contacts
+  CHECK(fs::file_size(dir / "s.json") > 0);
+  for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().extension() != ".partial");
+}
