@@ -23,7 +23,9 @@ Handle<cl_event> out_event(Timeline* timeline, cl_event& raw)
 
 Context::Context(std::string_view filter) : Context(select_device(filter)) {}
 
-Context::Context(const DeviceInfo& device) : device_(device), work_group_size_(pick_work_group_size(device))
+Context::Context(const DeviceInfo& device)
+    : device_(device), work_group_size_(pick_work_group_size(device)), memory_limit_(device.global_memory),
+      memory_in_use_(std::make_shared<std::atomic<std::size_t>>(0))
 {
   cl_int status = CL_SUCCESS;
   cl_context_properties properties[] = {CL_CONTEXT_PLATFORM, cl_context_properties(device.platform), 0};
@@ -96,12 +98,25 @@ void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t fi
 
 void Context::finish() { check(clFinish(queue_.get()), "clFinish"); }
 
-Buffer::Buffer(Context& context, std::size_t bytes, const char* label) : bytes_(bytes)
+void Context::set_memory_limit(std::size_t bytes) { memory_limit_ = std::min(bytes, device_.global_memory); }
+
+Buffer::Buffer(Context& context, std::size_t bytes, const char* label)
 {
+  // Drivers allocate lazily and report a shortage later, at some launch, without naming
+  // the allocation; checked here, it is named and nothing is enqueued.
+  const DeviceInfo& device = context.device();
+  if (bytes > device.max_allocation)
+    throw DeviceMemoryExhausted(label, bytes, device.name + " allocates at most " + mebibytes(device.max_allocation) +
+                                              " at once");
+  const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
+  if (bytes > limit || in_use > limit - bytes)
+    throw DeviceMemoryExhausted(label, bytes, mebibytes(in_use) + " of the " + mebibytes(limit) + " of " + device.name +
+                                              " are in use");
   cl_int status = CL_SUCCESS;
   // A zero-byte cl_mem is invalid; one word keeps empty streams bindable as arguments.
-  mem_ = Handle<cl_mem>(clCreateBuffer(context.get(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 4), nullptr, &status));
+  Handle<cl_mem> mem(clCreateBuffer(context.get(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 4), nullptr, &status));
   check(status, "clCreateBuffer", std::string("allocating ") + std::to_string(bytes) + " bytes for " + label);
+  allocation_ = std::make_shared<const Allocation>(std::move(mem), bytes, context.memory_account());
 }
 
 void ensure_capacity(Context& context, Buffer& buffer, std::size_t bytes, const char* label)

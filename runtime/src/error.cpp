@@ -1,5 +1,7 @@
 #include <cstreams/runtime/error.hpp>
 
+#include <cstdio>
+
 namespace cstreams::runtime {
 
 namespace {
@@ -97,6 +99,19 @@ const char* cl_status_name(cl_int status) noexcept
     case -1001: return "CL_PLATFORM_NOT_FOUND_KHR";
     default: return "unknown OpenCL status";
   }
+}
+
+DeviceMemoryExhausted::DeviceMemoryExhausted(const std::string& label, std::size_t bytes, const std::string& why)
+    : Error("device memory exhausted: allocating " + mebibytes(bytes) + " for " + label + ", but " + why),
+      requested_(bytes)
+{
+}
+
+std::string mebibytes(std::size_t bytes)
+{
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / (1 << 20));
+  return text;
 }
 
 StreamLimitExceeded::StreamLimitExceeded(const std::string& stream, std::size_t needed, std::size_t limit)

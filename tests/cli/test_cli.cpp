@@ -3,12 +3,14 @@
 #include "../support/benchmark_data.hpp"
 
 #include <commands.hpp>
+#include <inputs.hpp>
 #include <cstreams/errors.hpp>
 
 #include <catch2/catch.hpp>
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -118,4 +120,17 @@ TEST_CASE("a run writes its contacts and statistics whole", "[cli][quick]")
   CHECK(lines > 1);  // a header and the step's contacts
   CHECK(fs::file_size(dir / "s.json") > 0);
   for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().extension() != ".partial");
+}
+
+TEST_CASE("the command-line fuzz corpus parses or is refused", "[cli][fuzz][quick]")
+{
+  std::size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(std::string(CSTREAMS_FUZZ_CORPUS) + "/command_line")) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+    INFO(entry.path().string());
+    CHECK_NOTHROW(cstreams::fuzz::command_line(bytes));
+    ++files;
+  }
+  CHECK(files >= 8);
 }

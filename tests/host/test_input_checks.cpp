@@ -115,6 +115,7 @@ TEST_CASE("a folder where a file belongs is named as such", "[io][quick]")
   CHECK_THROWS_WITH(read_queries((dir / "queries.csv").string()),
                     Catch::EndsWith("queries.csv: is a directory, not a query file"));
   CHECK_THROWS_WITH(read_mesh((dir / "missing.obj").string()), Catch::EndsWith("missing.obj: no such mesh file"));
+  CHECK_THROWS_WITH(read_ply("/dev/zero"), Catch::Equals("/dev/zero: is not a regular file, not a mesh file"));
 }
 
 TEST_CASE("query files hold exact rationals only", "[io][quick]")

@@ -232,24 +232,3 @@ TEST_CASE("manifests describe objects, kinds, frames and masks", "[host][scene][
   write_text(dir + "/bad4.json", R"({"objects": [{"name": "x", "frames": ["missing.ply"]}]})");
   CHECK_THROWS_WITH(load_scene(dir + "/bad4.json"), Catch::Contains("missing.ply: no such mesh file"));
 }
-
-TEST_CASE("the fuzzing corpus parses or fails with InputError", "[host][io][quick]")
-{
-  // tests/fuzz/corpus: the seeds and the merged corpus of a libFuzzer run; any crash
-  // the fuzzer ever finds is added here and stays.
-  std::size_t files = 0;
-  for (const auto& entry : std::filesystem::directory_iterator(CSTREAMS_FUZZ_CORPUS)) {
-    std::ifstream in(entry.path(), std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), {});
-    for (bool ply : {true, false}) {
-      try {
-        const Mesh m = ply ? parse_ply(bytes, "corpus") : parse_obj(bytes, "corpus");
-        for (const auto& f : m.faces)
-          for (auto v : f) REQUIRE(v < m.positions.size());
-      } catch (const InputError&) {
-      }
-    }
-    ++files;
-  }
-  CHECK(files > 100);
-}

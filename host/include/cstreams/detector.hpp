@@ -112,6 +112,10 @@ public:
   // Both ends of the next step (replaying recorded frames, repeating a step).
   void set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end);
 
+  // A failure on the device part-way through a step (memory exhausted, a lost device)
+  // is thrown as runtime::Error and leaves the detector refusing every further call
+  // with that reason: no step that did not run reports "no collision". Create a new
+  // detector (on a new context after a lost device).
   void detect(Report report = Report::contacts);
 
   // The last step's contacts in canonical order (needs Report::contacts).
@@ -128,6 +132,7 @@ public:
 
 private:
   struct State;
+  void run_step(Report report);
   std::unique_ptr<State> state_;
 };
 

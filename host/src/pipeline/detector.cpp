@@ -115,6 +115,30 @@ struct Detector::State {
   std::vector<Contact> contacts;
   bool have_contacts = false;
   DetectorStats stats;
+  // Why a step failed part-way on the device (its streams, front and positions are then
+  // in an unknown state); empty while the detector is usable.
+  std::string failure;
+
+  void check_usable() const
+  {
+    if (!failure.empty())
+      throw Error("this detector cannot be used after its step failed on the device (" + failure +
+                  "); create a new one");
+  }
+
+  // Runs device work; a failure other than bad input marks the detector unusable.
+  template <class Work> void guarded(Work work)
+  {
+    check_usable();
+    try {
+      work();
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      failure = e.what();
+      throw;
+    }
+  }
 };
 
 namespace {
@@ -148,19 +172,32 @@ std::uint32_t Detector::object(const std::string& name) const
 void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
 {
   State& s = *state_;
+  s.check_usable();
   const auto f = checked_positions(s.scene, object, end);
-  write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f, end);
+  s.guarded([&] { write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f, end); });
 }
 
 void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
 {
   State& s = *state_;
+  s.check_usable();
   const auto f0 = checked_positions(s.scene, object, start), f1 = checked_positions(s.scene, object, end);
-  write_positions(*s.scheduler, s.layout, s.streams.x0, s.streams.x0_double, object, f0, start);
-  write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f1, end);
+  s.guarded([&] {
+    write_positions(*s.scheduler, s.layout, s.streams.x0, s.streams.x0_double, object, f0, start);
+    write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f1, end);
+  });
 }
 
 void Detector::detect(Report report)
+{
+  State& s = *state_;
+  s.check_usable();
+  s.contacts.clear();
+  s.have_contacts = false;
+  s.guarded([&] { run_step(report); });
+}
+
+void Detector::run_step(Report report)
 {
   State& s = *state_;
   const auto started = std::chrono::steady_clock::now();
@@ -172,12 +209,11 @@ void Detector::detect(Report report)
   q.copy(st.x1, 0, st.x0, 0, s.layout.moving_vertices);
   if (has(st.x1_double)) q.copy(st.x1_double, 0, st.x0_double, 0, s.layout.moving_vertices);
 
-  s.contacts.clear();
-  s.have_contacts = report == Report::contacts;
-  if (s.have_contacts) {
+  if (report == Report::contacts) {
     for (const auto& [stream, kind] : st.contacts)
       for (const Found& c : q.download<Found>(stream)) s.contacts.push_back(s.ids.contact(kind, c));
     sort_canonical(s.contacts);
+    s.have_contacts = true;
   }
   DetectorStats& stats = s.stats;
   stats.run = q.stats();
@@ -193,6 +229,7 @@ void Detector::detect(Report report)
 
 const std::vector<Contact>& Detector::contacts() const
 {
+  state_->check_usable();
   if (!state_->have_contacts) throw Error("the last step read back only the earliest times; detect(Report::contacts)");
   return state_->contacts;
 }
@@ -200,6 +237,7 @@ const std::vector<Contact>& Detector::contacts() const
 std::vector<double> Detector::earliest_toi() const
 {
   const State& s = *state_;
+  s.check_usable();
   std::vector<double> out(s.scene.objects.size(), 1.0);
   if (!has(s.streams.earliest)) return out;
   const auto bits = s.scheduler->download<std::uint32_t>(s.streams.earliest);
@@ -214,6 +252,7 @@ std::vector<double> Detector::earliest_toi() const
 Candidates Detector::candidates() const
 {
   const State& s = *state_;
+  s.check_usable();
   const auto n = std::uint32_t(s.scene.objects.size());
   std::map<std::pair<std::uint32_t, std::uint32_t>, CandidateBlock> blocks;
   for (std::uint32_t a = 0; a < n; ++a)

@@ -6,6 +6,7 @@
 #include <cstreams/runtime/program_registry.hpp>
 #include <cstreams/runtime/timeline.hpp>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -49,11 +50,20 @@ public:
                 Timeline* timeline = nullptr);
   void finish();
 
+  // Device memory: what this context's live buffers hold, and the most they may (the
+  // device's global memory unless lowered). Buffer refuses allocations past the limit.
+  std::size_t memory_in_use() const noexcept { return *memory_in_use_; }
+  std::size_t memory_limit() const noexcept { return memory_limit_; }
+  void set_memory_limit(std::size_t bytes);
+  const std::shared_ptr<std::atomic<std::size_t>>& memory_account() const noexcept { return memory_in_use_; }
+
 private:
   DeviceInfo device_;
   Handle<cl_context> context_;
   Handle<cl_command_queue> queue_;
   std::size_t work_group_size_ = 0;
+  std::size_t memory_limit_ = 0;
+  std::shared_ptr<std::atomic<std::size_t>> memory_in_use_;
   std::unique_ptr<ProgramRegistry> programs_;
 };
 

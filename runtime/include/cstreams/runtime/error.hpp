@@ -54,6 +54,20 @@ private:
   std::size_t needed_;
 };
 
+// An allocation the device cannot hold: over its largest single allocation, or over
+// the memory left under the context's limit (Context::memory_limit()).
+class DeviceMemoryExhausted : public Error {
+public:
+  DeviceMemoryExhausted(const std::string& label, std::size_t bytes, const std::string& why);
+  std::size_t requested() const noexcept { return requested_; }
+
+private:
+  std::size_t requested_;
+};
+
+// "12.5 MiB"
+std::string mebibytes(std::size_t bytes);
+
 const char* cl_status_name(cl_int status) noexcept;
 
 // Throws ClError when status is not CL_SUCCESS. `context` says what was being done.

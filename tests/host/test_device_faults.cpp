@@ -1,0 +1,108 @@
+// Faults of the device: memory running out (at set-up and part-way through a step) and
+// kernels that fail to build. Each is an error naming what failed; nothing is reported
+// as "no collision" for a step that did not run; the context stays usable.
+#include "../support/benchmark_data.hpp"
+#include "../support/test_device.hpp"
+
+#include <cstreams/detector.hpp>
+#include <cstreams/devices.hpp>
+#include <cstreams/errors.hpp>
+#include <cstreams/runtime/context.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+using namespace cstreams;
+
+namespace {
+
+Scene funnel()
+{
+  const std::string dir = cstreams::test::benchmark_path("scalable-ccd-sample/cloth-funnel/frames/");
+  return scene_from_frames({dir + "227.ply", dir + "228.ply"});
+}
+
+std::vector<Contact> step_contacts(Detector& detector, const Step& step)
+{
+  detector.set_step(0, step.x0[0], step.x1[0]);
+  detector.detect();
+  return detector.contacts();
+}
+
+bool same(const std::vector<Contact>& a, const std::vector<Contact>& b)
+{
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (!a[i].same_features(b[i]) || a[i].toi != b[i].toi) return false;
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("device memory running out is an error naming the allocation, never a silent step", "[faults][quick]")
+{
+  const Scene scene = funnel();
+  const Step step = load_step(scene, 0);
+  Detector reference(cstreams::test::device(), describe(scene, 0));
+  const std::vector<Contact> expected = step_contacts(reference, step);
+  REQUIRE(!expected.empty());
+
+  runtime::Context context(filter_from_environment());
+  SECTION("at set-up: the detector is not built and the memory is given back")
+  {
+    context.set_memory_limit(2 << 20);
+    CHECK_THROWS_AS(Detector(context, describe(scene, 0)), runtime::DeviceMemoryExhausted);
+    CHECK_THROWS_WITH(Detector(context, describe(scene, 0)),
+                      Catch::StartsWith("device memory exhausted: allocating ") && Catch::Contains("of the 2.0 MiB of"));
+    CHECK(context.memory_in_use() == 0);
+    context.set_memory_limit(std::size_t(1) << 40);
+    Detector detector(context, describe(scene, 0));
+    CHECK(same(step_contacts(detector, step), expected));
+  }
+  SECTION("part-way through a step: the detector refuses every further call, a new one works")
+  {
+    DetectorOptions tiny;
+    tiny.initial_capacity = 16;  // every variable stream must grow during the step
+    Detector detector(context, describe(scene, 0), tiny);
+    context.set_memory_limit(context.memory_in_use() + (64 << 10));
+    detector.set_step(0, step.x0[0], step.x1[0]);
+    CHECK_THROWS_AS(detector.detect(), runtime::DeviceMemoryExhausted);
+    CHECK_THROWS_WITH(detector.contacts(), Catch::Contains("cannot be used after its step failed on the device") &&
+                                               Catch::Contains("device memory exhausted"));
+    CHECK_THROWS_WITH(detector.detect(), Catch::Contains("create a new one"));
+    CHECK_THROWS_WITH(detector.set_positions(0, step.x1[0]), Catch::Contains("create a new one"));
+
+    context.set_memory_limit(std::size_t(1) << 40);
+    Detector fresh(context, describe(scene, 0), tiny);
+    CHECK(same(step_contacts(fresh, step), expected));
+  }
+}
+
+TEST_CASE("a kernel that fails to build is named with its log, and the context builds the next", "[faults][quick]")
+{
+  const Scene scene = funnel();
+  const Step step = load_step(scene, 0);
+  const auto dir = std::filesystem::temp_directory_path() / "cstreams-broken-kernels";
+  std::filesystem::create_directories(dir / "ccd");
+  std::ofstream(dir / "ccd" / "refine.cl") << "__kernel void cs_refine_breadth_first(undeclared_type x) {}\n";
+
+  runtime::Context context(filter_from_environment());
+  ::setenv("CSTREAMS_KERNEL_DIR", dir.c_str(), 1);
+  std::string error;
+  try {
+    Detector broken(context, describe(scene, 0));
+    step_contacts(broken, step);
+  } catch (const runtime::BuildError& e) {
+    error = e.what();
+    CHECK_THAT(e.log(), Catch::Contains("undeclared_type"));
+  }
+  ::unsetenv("CSTREAMS_KERNEL_DIR");
+  CHECK_THAT(error, Catch::Contains("ccd/refine.cl"));
+
+  Detector detector(context, describe(scene, 0));
+  Detector reference(cstreams::test::device(), describe(scene, 0));
+  CHECK(same(step_contacts(detector, step), step_contacts(reference, step)));
+}
