@@ -98,6 +98,23 @@ void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t fi
 
 void Context::finish() { check(clFinish(queue_.get()), "clFinish"); }
 
+Context::ThreadGuard::ThreadGuard(Context& context) : context_(context)
+{
+  const std::thread::id me = std::this_thread::get_id();
+  std::thread::id none;
+  if (context.user_.compare_exchange_strong(none, me)) {
+    owner_ = true;
+  } else if (none != me) {
+    throw Error("the context of " + context.device_.name +
+                " is in use by another thread; give each thread its own runtime::Context");
+  }
+}
+
+Context::ThreadGuard::~ThreadGuard()
+{
+  if (owner_) context_.user_ = std::thread::id();
+}
+
 void Context::set_memory_limit(std::size_t bytes) { memory_limit_ = std::min(bytes, device_.global_memory); }
 
 Buffer::Buffer(Context& context, std::size_t bytes, const char* label)

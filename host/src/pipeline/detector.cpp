@@ -88,7 +88,7 @@ bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 // scheduler running its graph, and the last step's results.
 struct Detector::State {
   State(runtime::Context& device, SceneDescription s, const DetectorOptions& o)
-      : scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
+      : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
         front(o, layout, 4 * device.device().compute_units * device.work_group_size()),
         ids(layout, scene, o.solver.precision)
   {
@@ -105,6 +105,7 @@ struct Detector::State {
 
   std::size_t count(runtime::StreamId s) const { return has(s) ? scheduler->count(s) : 0; }
 
+  runtime::Context& context;
   SceneDescription scene;
   DetectorOptions options;
   SceneLayout layout;
@@ -130,6 +131,7 @@ struct Detector::State {
   template <class Work> void guarded(Work work)
   {
     check_usable();
+    runtime::Context::ThreadGuard one_thread(context);
     try {
       work();
     } catch (const InputError&) {
@@ -155,8 +157,9 @@ runtime::Context& checked_device(runtime::Context& device, const DetectorOptions
 }  // namespace
 
 Detector::Detector(runtime::Context& device, SceneDescription scene, DetectorOptions options)
-    : state_(std::make_unique<State>(checked_device(device, options), std::move(scene), options))
 {
+  runtime::Context::ThreadGuard one_thread(device);
+  state_ = std::make_unique<State>(checked_device(device, options), std::move(scene), options);
 }
 
 Detector::~Detector() = default;
@@ -238,6 +241,7 @@ std::vector<double> Detector::earliest_toi() const
 {
   const State& s = *state_;
   s.check_usable();
+  runtime::Context::ThreadGuard one_thread(s.context);
   std::vector<double> out(s.scene.objects.size(), 1.0);
   if (!has(s.streams.earliest)) return out;
   const auto bits = s.scheduler->download<std::uint32_t>(s.streams.earliest);
@@ -253,6 +257,7 @@ Candidates Detector::candidates() const
 {
   const State& s = *state_;
   s.check_usable();
+  runtime::Context::ThreadGuard one_thread(s.context);
   const auto n = std::uint32_t(s.scene.objects.size());
   std::map<std::pair<std::uint32_t, std::uint32_t>, CandidateBlock> blocks;
   for (std::uint32_t a = 0; a < n; ++a)

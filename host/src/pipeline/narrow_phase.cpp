@@ -123,6 +123,7 @@ DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& optio
     : context_(context), options_(options)
 {
   check_solver_options(context, options);
+  runtime::Context::ThreadGuard one_thread(context);
   context.programs().add_sources(ccd_kernel_sources());
 }
 
@@ -138,6 +139,7 @@ DeviceSolver::Graph& DeviceSolver::graph(ContactKind kind)
 std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::vector<Query>& queries,
                                                   std::uint64_t* kernel_ns)
 {
+  runtime::Context::ThreadGuard one_thread(context_);
   const std::size_t n = queries.size();
   std::vector<ElementaryResult> results(n);
   if (kernel_ns) *kernel_ns = 0;

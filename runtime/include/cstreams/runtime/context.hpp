@@ -12,14 +12,34 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <thread>
 
 namespace cstreams::runtime {
 
 // A device with its OpenCL context, one in-order profiling queue and its program
 // registry. Everything the runtime enqueues goes through this queue, so passes need
 // no events to order themselves.
+//
+// Threads: a context, and everything built on it, is used by one thread at a time.
+// Its kernels are shared objects whose arguments are set before each launch, so two
+// threads on one context would race; ThreadGuard turns that into an error. Threads
+// that detect at the same time each open their own context (any number per device).
 class Context {
 public:
+  // Held while a detector or solver works on the context; re-entrant within a thread.
+  // Throws Error when another thread holds the context.
+  class ThreadGuard {
+  public:
+    explicit ThreadGuard(Context& context);
+    ~ThreadGuard();
+    ThreadGuard(const ThreadGuard&) = delete;
+    ThreadGuard& operator=(const ThreadGuard&) = delete;
+
+  private:
+    Context& context_;
+    bool owner_ = false;
+  };
+
   explicit Context(const DeviceInfo& device);
   // Opens the device that `filter` selects (see select_device()).
   explicit Context(std::string_view filter);
@@ -64,6 +84,7 @@ private:
   std::size_t work_group_size_ = 0;
   std::size_t memory_limit_ = 0;
   std::shared_ptr<std::atomic<std::size_t>> memory_in_use_;
+  std::atomic<std::thread::id> user_{};
   std::unique_ptr<ProgramRegistry> programs_;
 };
 
