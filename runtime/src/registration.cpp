@@ -22,7 +22,7 @@ Registration parse_registration(std::string_view text)
   std::replace(t.begin(), t.end(), '_', '-');
   for (auto r : {Registration::global_atomic, Registration::segmented_lock, Registration::lock_free})
     if (t == to_string(r)) return r;
-  throw Error("unknown registration '" + std::string(text) + "' (global-atomic, segmented-lock or lock-free)");
+  throw InputError("unknown registration '" + std::string(text) + "' (global-atomic, segmented-lock or lock-free)");
 }
 
 }  // namespace cstreams::runtime

@@ -13,6 +13,13 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+// Bad input from a file or from the caller: the message names the file, line, option,
+// element or object at fault.
+class InputError : public Error {
+public:
+  using Error::Error;
+};
+
 // An OpenCL call returned an error status.
 class ClError : public Error {
 public:
