@@ -237,7 +237,11 @@ Scene parse_scene_manifest(const std::string& text, const std::string& path)
       SceneObject object;
       object.name = o.value("name", "object" + std::to_string(i));
       const std::string where = path + ": object " + object.name;
-      object.kind = parse_object_kind(o.value("kind", "deformable"));
+      try {
+        object.kind = parse_object_kind(o.value("kind", "deformable"));
+      } catch (const InputError& e) {
+        throw InputError(where + ": " + e.what());
+      }
       object.self_collision = o.value("self_collision", object.kind == ObjectKind::deformable);
       if (!o.contains("frames")) throw InputError(where + ": no \"frames\"");
       object.frame_files = frame_list(o["frames"], base, where);
