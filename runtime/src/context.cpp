@@ -1,6 +1,9 @@
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
 
+#include <algorithm>
+#include <string>
+
 namespace cstreams::runtime {
 
 namespace {
@@ -8,10 +11,63 @@ namespace {
 // the scan's local tile (8 items each) within 8 KiB; pocl runs it as a loop.
 constexpr std::size_t preferred_work_group_size = 256;
 
-std::size_t pick_work_group_size(const DeviceInfo& device)
+// What the device does with kernels of the kind the runtime builds (see
+// cl_kernels/runtime/probe.cl), learnt once when a context opens.
+struct Probe {
+  std::size_t work_group_size = 0;  // a kernel with local memory and barriers, per group
+  std::uint32_t loop_trips = 0;     // trips a kernel's loops ran of the 2^17 asked
+};
+
+Probe probe_device(const DeviceInfo& device, cl_context context, cl_command_queue queue)
 {
+  const SourceSet& sources = runtime_kernel_sources();
+  const auto source = std::find_if(sources.begin(), sources.end(),
+                                   [](const SourceFile& s) { return std::string(s.name) == "runtime/probe.cl"; });
+  if (source == sources.end()) throw Error("runtime/probe.cl is not embedded in this program");
+  cl_int status = CL_SUCCESS;
+  const char* text = source->text;
+  Handle<cl_program> program(clCreateProgramWithSource(context, 1, &text, nullptr, &status));
+  check(status, "clCreateProgramWithSource", "runtime/probe.cl");
+  check(clBuildProgram(program.get(), 1, &device.id, "-cl-std=CL1.2", nullptr, nullptr), "clBuildProgram",
+        "runtime/probe.cl on " + device.name);
+  Probe probe;
+  Handle<cl_kernel> group(clCreateKernel(program.get(), "cs_probe_work_group", &status));
+  check(status, "clCreateKernel", "cs_probe_work_group");
+  check(clGetKernelWorkGroupInfo(group.get(), device.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof probe.work_group_size,
+                                 &probe.work_group_size, nullptr),
+        "clGetKernelWorkGroupInfo", "cs_probe_work_group on " + device.name);
+
+  Handle<cl_kernel> loop(clCreateKernel(program.get(), "cs_probe_loop_trips", &status));
+  check(status, "clCreateKernel", "cs_probe_loop_trips");
+  std::uint32_t counts[3] = {0, 1, 1};
+  const std::uint32_t asked = 1u << 17;
+  Handle<cl_mem> buffer(clCreateBuffer(context, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof counts, counts, &status));
+  check(status, "clCreateBuffer", "probing " + device.name);
+  cl_mem raw = buffer.get();
+  check(clSetKernelArg(loop.get(), 0, sizeof raw, &raw), "clSetKernelArg", "cs_probe_loop_trips");
+  check(clSetKernelArg(loop.get(), 1, sizeof asked, &asked), "clSetKernelArg", "cs_probe_loop_trips");
+  const std::size_t one = 1;
+  check(clEnqueueNDRangeKernel(queue, loop.get(), 1, nullptr, &one, &one, 0, nullptr, nullptr), "clEnqueueNDRangeKernel",
+        "cs_probe_loop_trips on " + device.name);
+  check(clEnqueueReadBuffer(queue, raw, CL_TRUE, 0, sizeof counts, counts, 0, nullptr, nullptr), "clEnqueueReadBuffer",
+        "cs_probe_loop_trips on " + device.name);
+  probe.loop_trips = counts[0];
+  // The searches of the conservative solver and the stream passes loop as long as their
+  // input asks; a device that cuts loops short would lose contacts without a word.
+  if (probe.loop_trips != asked)
+    throw Error("device " + device.name + " (" + device.platform_name + ") ends a kernel's loops after " +
+                std::to_string(probe.loop_trips) + " trips, silently (a limit of Mesa's llvmpipe); cstreams' "
+                "searches may need more, so its results could miss contacts: use another device");
+  return probe;
+}
+
+// The largest power of two within what the device and its kernels allow, at most the
+// preferred size.
+std::size_t pick_work_group_size(const DeviceInfo& device, std::size_t kernel_limit)
+{
+  const std::size_t limit = std::min({preferred_work_group_size, device.max_work_group_size, kernel_limit});
   std::size_t size = 1;
-  while (size * 2 <= std::min(preferred_work_group_size, device.max_work_group_size)) size *= 2;
+  while (size * 2 <= limit) size *= 2;
   return size;
 }
 
@@ -21,10 +77,13 @@ Handle<cl_event> out_event(Timeline* timeline, cl_event& raw)
 }
 }  // namespace
 
-Context::Context(std::string_view filter) : Context(select_device(filter)) {}
+Context::Context(std::string_view filter, std::size_t max_work_group_size)
+    : Context(select_device(filter), max_work_group_size)
+{
+}
 
-Context::Context(const DeviceInfo& device)
-    : device_(device), work_group_size_(pick_work_group_size(device)), memory_limit_(device.global_memory),
+Context::Context(const DeviceInfo& device, std::size_t max_work_group_size)
+    : device_(device), memory_limit_(device.global_memory),
       memory_in_use_(std::make_shared<std::atomic<std::size_t>>(0))
 {
   cl_int status = CL_SUCCESS;
@@ -33,6 +92,9 @@ Context::Context(const DeviceInfo& device)
   check(status, "clCreateContext", "opening " + device_.name);
   queue_ = Handle<cl_command_queue>(clCreateCommandQueue(context_.get(), device_.id, CL_QUEUE_PROFILING_ENABLE, &status));
   check(status, "clCreateCommandQueue", "opening " + device_.name);
+  std::size_t limit = probe_device(device_, context_.get(), queue_.get()).work_group_size;
+  if (max_work_group_size) limit = std::min(limit, max_work_group_size);
+  work_group_size_ = pick_work_group_size(device_, limit);
   programs_ = std::make_unique<ProgramRegistry>(*this);
   programs_->add_sources(runtime_kernel_sources());
 }

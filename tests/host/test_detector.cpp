@@ -4,6 +4,7 @@
 
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/detector.hpp>
+#include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/generators.hpp>
@@ -338,4 +339,27 @@ TEST_CASE("bad input at the API is a clear error and the detector stays usable",
   CHECK_THROWS_WITH(Detector(cstreams::test::device(), broken), Catch::Contains("object 'tri': face 0 repeats a vertex"));
   broken.objects[0].faces = {{0, 1, 3}};
   CHECK_THROWS_WITH(Detector(cstreams::test::device(), broken), Catch::Contains("face 0 uses vertex 3 of 3"));
+}
+
+TEST_CASE("contacts do not depend on the work-group size a device runs", "[detector][quick]")
+{
+  // Devices differ in how many work-items a group may hold (rusticl on llvmpipe: 32);
+  // the conservative refinement keeps 256 box positions a group whatever that number.
+  const Scene scene = funnel();
+  const Step step = load_step(scene, 0);
+  runtime::Context small(filter_from_environment(), 32);
+  REQUIRE(small.work_group_size() == 32);
+  for (Precision precision : {Precision::single, Precision::double_}) {
+    if (precision == Precision::double_ && !small.device().fp64) continue;
+    DetectorOptions options;
+    options.solver.precision = precision;
+    Detector a(cstreams::test::device(), describe(scene, 0), options), b(small, describe(scene, 0), options);
+    run_step(a, step);
+    run_step(b, step);
+    REQUIRE(a.contacts().size() == b.contacts().size());
+    for (std::size_t i = 0; i < a.contacts().size(); ++i) {
+      CHECK(a.contacts()[i].same_features(b.contacts()[i]));
+      CHECK(a.contacts()[i].toi == b.contacts()[i].toi);
+    }
+  }
 }

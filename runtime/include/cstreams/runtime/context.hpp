@@ -40,9 +40,11 @@ public:
     bool owner_ = false;
   };
 
-  explicit Context(const DeviceInfo& device);
+  // max_work_group_size (a power of two; 0: none) keeps the runtime's groups smaller
+  // than the device allows, as a smaller device would run them.
+  explicit Context(const DeviceInfo& device, std::size_t max_work_group_size = 0);
   // Opens the device that `filter` selects (see select_device()).
-  explicit Context(std::string_view filter);
+  explicit Context(std::string_view filter, std::size_t max_work_group_size = 0);
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
   ~Context();
@@ -52,7 +54,8 @@ public:
   cl_command_queue queue() const noexcept { return queue_.get(); }
   ProgramRegistry& programs() noexcept { return *programs_; }
 
-  // Work-group size of every kernel the runtime launches with a fixed local size.
+  // Work-group size of every kernel the runtime launches with a fixed local size: the
+  // largest power of two up to 256 that the device and its kernels allow.
   std::size_t work_group_size() const noexcept { return work_group_size_; }
 
   // Launches a 1-D range of `global` work-items (rounded up to `local`; 0 lets the
