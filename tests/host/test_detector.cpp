@@ -1,37 +1,23 @@
 // The device pipeline through the public API, against the host reference.
 #include "../support/benchmark_data.hpp"
 #include "../support/test_device.hpp"
+#include "../support/test_scenes.hpp"
 
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
-#include <cstreams/scenes/generators.hpp>
 #include <cstreams/scenes/shapes.hpp>
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 
 using namespace cstreams;
 
 namespace {
-
-Scene generated(const std::string& name, int frames, int resolution)
-{
-  const auto folder = (std::filesystem::temp_directory_path() / ("cstreams-detector-" + name)).string();
-  std::filesystem::remove_all(folder);
-  return load_scene(scenes::generate_scene({name, folder, 1, frames, resolution}));
-}
-
-Scene funnel()
-{
-  const std::string dir = cstreams::test::benchmark_path("scalable-ccd-sample/cloth-funnel/frames/");
-  return scene_from_frames({dir + "227.ply", dir + "228.ply"});
-}
 
 // Runs one step of `scene` from `frame` through a detector built at that frame.
 void run_step(Detector& detector, const Step& step)
@@ -174,7 +160,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
 
 TEST_CASE("device candidates equal the host's in float boxes, in every front mode", "[detector][quick]")
 {
-  const Scene f = funnel();
+  const Scene f = cstreams::test::cloth_funnel();
   DetectorOptions options;
   for (auto front : {FrontMode::none, FrontMode::exact, FrontMode::deferred}) {
     options.front = front;
@@ -187,9 +173,9 @@ TEST_CASE("device candidates equal the host's in float boxes, in every front mod
 
   // Multi-object scenes: cloth against a static sphere, and tumbling rigid bodies.
   options.solver.min_separation = 0;
-  const Scene cloth = generated("cloth-sphere", 36, 40);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 36, 40);
   check_candidates(cloth, 33, options);
-  Scene bart = generated("bart", 12, 0);
+  Scene bart = cstreams::test::generated_scene("bart", 12, 0);
   bart.ignored_pairs.emplace_back(0, 1);
   bart.ignored_pairs.emplace_back(2, 5);
   options.registration = runtime::Registration::lock_free;
@@ -230,7 +216,7 @@ bool same(const std::vector<std::vector<Contact>>& a, const std::vector<std::vec
 TEST_CASE("front modes, registrations and tiny capacities report identical contacts over many frames",
           "[detector][quick]")
 {
-  const Scene cloth = generated("cloth-sphere", 30, 30);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 30, 30);
   DetectorOptions options;
   options.front = FrontMode::none;
   const auto expected = run_frames(cloth, options, 10, 29);
@@ -261,7 +247,7 @@ TEST_CASE("front modes, registrations and tiny capacities report identical conta
 
 TEST_CASE("device contacts equal the solver's on the host's candidates, in both precisions", "[detector][quick]")
 {
-  const Scene cloth = generated("cloth-sphere", 36, 40);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 36, 40);
   const Step step = load_step(cloth, 33);
   ReferenceOptions host;
   host.bounds = BoundsPrecision::single;
@@ -311,7 +297,7 @@ TEST_CASE("device contacts equal the solver's on the host's candidates, in both 
 
 TEST_CASE("bad input at the API is a clear error and the detector stays usable", "[detector][quick]")
 {
-  const Scene cloth = generated("cloth-sphere", 36, 30);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 36, 30);
   Detector detector(cstreams::test::device(), describe(cloth, 30));
   const Step step = load_step(cloth, 30);
   run_step(detector, step);
@@ -345,7 +331,7 @@ TEST_CASE("contacts do not depend on the work-group size a device runs", "[detec
 {
   // Devices differ in how many work-items a group may hold (rusticl on llvmpipe: 32);
   // the conservative refinement keeps 256 box positions a group whatever that number.
-  const Scene scene = funnel();
+  const Scene scene = cstreams::test::cloth_funnel();
   const Step step = load_step(scene, 0);
   runtime::Context small(filter_from_environment(), 32);
   REQUIRE(small.work_group_size() == 32);

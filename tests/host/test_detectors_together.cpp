@@ -1,16 +1,15 @@
 // Detectors side by side (one context, one device, several threads) and over long runs:
 // each reports what it reports alone, and memory stays flat.
 #include "../support/test_device.hpp"
+#include "../support/test_scenes.hpp"
 
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/runtime/context.hpp>
-#include <cstreams/scenes/generators.hpp>
 
 #include <catch2/catch.hpp>
 
-#include <filesystem>
 #include <fstream>
 #include <thread>
 #include <unistd.h>
@@ -18,13 +17,6 @@
 using namespace cstreams;
 
 namespace {
-
-Scene generated(const std::string& name, int frames, int resolution)
-{
-  const auto folder = (std::filesystem::temp_directory_path() / ("cstreams-together-" + name)).string();
-  std::filesystem::remove_all(folder);
-  return load_scene(scenes::generate_scene({name, folder, 1, frames, resolution}));
-}
 
 using StepContacts = std::vector<std::vector<Contact>>;
 
@@ -85,7 +77,7 @@ std::size_t resident_bytes()
 TEST_CASE("two detectors interleaved on one context or one device report what each reports alone",
           "[detector][together][quick]")
 {
-  const Scene cloth = generated("cloth-sphere", 34, 24), bodies = generated("bart", 12, 30);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 34, 24), bodies = cstreams::test::generated_scene("bart", 12, 30);
   const std::size_t steps = 5;
   const StepContacts cloth_alone = alone(cloth, 27, steps), bodies_alone = alone(bodies, 5, steps);
   REQUIRE(contact_count(cloth_alone) > 0);
@@ -121,7 +113,7 @@ TEST_CASE("two detectors interleaved on one context or one device report what ea
 TEST_CASE("detectors on two threads, each with its own context, report what they report alone",
           "[detector][together][quick]")
 {
-  const Scene cloth = generated("cloth-sphere", 34, 24), bodies = generated("bart", 12, 30);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 34, 24), bodies = cstreams::test::generated_scene("bart", 12, 30);
   const std::size_t steps = 5;
   const StepContacts cloth_alone = alone(cloth, 27, steps), bodies_alone = alone(bodies, 5, steps);
   StepContacts cloth_threaded, bodies_threaded;
@@ -134,7 +126,7 @@ TEST_CASE("detectors on two threads, each with its own context, report what they
 
 TEST_CASE("a context in use by one thread is refused to another with a clear error", "[detector][together][quick]")
 {
-  const Scene cloth = generated("cloth-sphere", 34, 24);
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 34, 24);
   runtime::Context context(filter_from_environment());
   Detector detector(context, describe(cloth, 27));
   std::string refused;
@@ -162,7 +154,7 @@ TEST_CASE("hundreds of steps: memory stays flat and contacts equal a fresh detec
   // again, so it may not need a byte more on the device or the host, nor report
   // anything else.
   const std::size_t steps = 150;
-  const Scene scene = generated("cloth-sphere", int(steps + 1), 16);
+  const Scene scene = cstreams::test::generated_scene("cloth-sphere", int(steps + 1), 16);
   runtime::Context context(filter_from_environment());
   Detector detector(context, describe(scene, 0));
   struct Pass {

@@ -3,6 +3,7 @@
 // as "no collision" for a step that did not run; the context stays usable.
 #include "../support/benchmark_data.hpp"
 #include "../support/test_device.hpp"
+#include "../support/test_scenes.hpp"
 
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
@@ -18,12 +19,6 @@
 using namespace cstreams;
 
 namespace {
-
-Scene funnel()
-{
-  const std::string dir = cstreams::test::benchmark_path("scalable-ccd-sample/cloth-funnel/frames/");
-  return scene_from_frames({dir + "227.ply", dir + "228.ply"});
-}
 
 std::vector<Contact> step_contacts(Detector& detector, const Step& step)
 {
@@ -44,7 +39,7 @@ bool same(const std::vector<Contact>& a, const std::vector<Contact>& b)
 
 TEST_CASE("device memory running out is an error naming the allocation, never a silent step", "[faults][quick]")
 {
-  const Scene scene = funnel();
+  const Scene scene = cstreams::test::cloth_funnel();
   const Step step = load_step(scene, 0);
   Detector reference(cstreams::test::device(), describe(scene, 0));
   const std::vector<Contact> expected = step_contacts(reference, step);
@@ -83,7 +78,7 @@ TEST_CASE("device memory running out is an error naming the allocation, never a 
 
 TEST_CASE("a kernel that fails to build is named with its log, and the context builds the next", "[faults][quick]")
 {
-  const Scene scene = funnel();
+  const Scene scene = cstreams::test::cloth_funnel();
   const Step step = load_step(scene, 0);
   const auto dir = std::filesystem::temp_directory_path() / "cstreams-broken-kernels";
   std::filesystem::create_directories(dir / "ccd");

@@ -1,0 +1,25 @@
+#include "test_scenes.hpp"
+
+#include "benchmark_data.hpp"
+
+#include <cstreams/scenes/generators.hpp>
+
+#include <filesystem>
+
+namespace cstreams::test {
+
+Scene generated_scene(const std::string& generator, int frames, int resolution)
+{
+  const auto folder = std::filesystem::temp_directory_path() /
+                      ("cstreams-test-" + generator + "-" + std::to_string(frames) + "-" + std::to_string(resolution));
+  std::filesystem::remove_all(folder);
+  return load_scene(scenes::generate_scene({generator, folder.string(), 1, frames, resolution}));
+}
+
+Scene cloth_funnel()
+{
+  const std::string dir = benchmark_path("scalable-ccd-sample/cloth-funnel/frames/");
+  return scene_from_frames({dir + "227.ply", dir + "228.ply"});
+}
+
+}  // namespace cstreams::test

@@ -1,0 +1,14 @@
+#pragma once
+// Scenes the host tests share: generated ones (written once per parameters into the
+// temporary folder) and the cloth-funnel step of the benchmark data.
+#include <cstreams/scene/scene.hpp>
+
+#include <string>
+
+namespace cstreams::test {
+
+Scene generated_scene(const std::string& generator, int frames, int resolution);
+// scalable-ccd-sample/cloth-funnel, frames 227 and 228: one step of one mesh.
+Scene cloth_funnel();
+
+}  // namespace cstreams::test
