@@ -155,6 +155,25 @@ void add_objects(Scene& scene, Scene::Cache& cache, SceneObject prototype, bool 
   }
 }
 
+// A whole-number field of a JSON object (`fallback` when absent), within [lo, hi]. Read
+// as JSON rather than converted, since converting 4.4e19 to a long is undefined.
+long whole_number(const nlohmann::json& object, const char* key, long fallback, long lo, long hi,
+                  const std::string& where)
+{
+  const auto it = object.find(key);
+  long value = fallback;
+  bool whole = true;
+  if (it != object.end()) {
+    // Signed integers are held as int64 (a long here); only unsigned ones may not fit.
+    whole = it->is_number_integer() && !(it->is_number_unsigned() && it->get<std::uint64_t>() > std::uint64_t(hi));
+    if (whole) value = it->get<long>();
+  }
+  if (!whole || value < lo || value > hi)
+    throw InputError(where + ": \"" + key + "\" must be a whole number from " + std::to_string(lo) + " to " +
+                     std::to_string(hi));
+  return value;
+}
+
 std::vector<std::string> frame_list(const nlohmann::json& frames, const std::string& base, const std::string& where)
 {
   std::vector<std::string> files;
@@ -170,11 +189,9 @@ std::vector<std::string> frame_list(const nlohmann::json& frames, const std::str
     static const std::regex one_integer(R"(^[^%]*%0?[0-9]*d[^%]*$)");
     if (!std::regex_match(pattern, one_integer))
       throw InputError(where + ": \"pattern\" must hold exactly one integer field such as %d or %03d");
-    const long first = frames.value("first", 0L), count = frames.value("count", -1L);
     // Bounded so that first + count - 1 stays an int, and a typo cannot ask for 10^15 files.
-    if (count <= 0 || count > 1000000)
-      throw InputError(where + ": \"count\" must be a number of frames from 1 to 1000000");
-    if (first < 0 || first > 1000000000) throw InputError(where + ": \"first\" must be from 0 to 1000000000");
+    const long first = whole_number(frames, "first", 0, 0, 1000000000, where);
+    const long count = whole_number(frames, "count", -1, 1, 1000000, where);
     for (long i = first; i < first + count; ++i) {
       char name[4096];
       std::snprintf(name, sizeof name, pattern.c_str(), int(i));
