@@ -12,13 +12,10 @@ namespace {
 constexpr std::size_t preferred_work_group_size = 256;
 
 // What the device does with kernels of the kind the runtime builds (see
-// cl_kernels/runtime/probe.cl), learnt once when a context opens.
-struct Probe {
-  std::size_t work_group_size = 0;  // a kernel with local memory and barriers, per group
-  std::uint32_t loop_trips = 0;     // trips a kernel's loops ran of the 2^17 asked
-};
-
-Probe probe_device(const DeviceInfo& device, cl_context context, cl_command_queue queue)
+// cl_kernels/runtime/probe.cl), learnt once when a context opens: the work-items a
+// kernel with local memory and barriers may run per group. Throws for a device that
+// ends kernels' loops early.
+std::size_t probe_device(const DeviceInfo& device, cl_context context, cl_command_queue queue)
 {
   const SourceSet& sources = runtime_kernel_sources();
   const auto source = std::find_if(sources.begin(), sources.end(),
@@ -30,11 +27,11 @@ Probe probe_device(const DeviceInfo& device, cl_context context, cl_command_queu
   check(status, "clCreateProgramWithSource", "runtime/probe.cl");
   check(clBuildProgram(program.get(), 1, &device.id, "-cl-std=CL1.2", nullptr, nullptr), "clBuildProgram",
         "runtime/probe.cl on " + device.name);
-  Probe probe;
+  std::size_t work_group_size = 0;
   Handle<cl_kernel> group(clCreateKernel(program.get(), "cs_probe_work_group", &status));
   check(status, "clCreateKernel", "cs_probe_work_group");
-  check(clGetKernelWorkGroupInfo(group.get(), device.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof probe.work_group_size,
-                                 &probe.work_group_size, nullptr),
+  check(clGetKernelWorkGroupInfo(group.get(), device.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof work_group_size,
+                                 &work_group_size, nullptr),
         "clGetKernelWorkGroupInfo", "cs_probe_work_group on " + device.name);
 
   Handle<cl_kernel> loop(clCreateKernel(program.get(), "cs_probe_loop_trips", &status));
@@ -51,14 +48,13 @@ Probe probe_device(const DeviceInfo& device, cl_context context, cl_command_queu
         "cs_probe_loop_trips on " + device.name);
   check(clEnqueueReadBuffer(queue, raw, CL_TRUE, 0, sizeof counts, counts, 0, nullptr, nullptr), "clEnqueueReadBuffer",
         "cs_probe_loop_trips on " + device.name);
-  probe.loop_trips = counts[0];
   // The searches of the conservative solver and the stream passes loop as long as their
   // input asks; a device that cuts loops short would lose contacts without a word.
-  if (probe.loop_trips != asked)
+  if (counts[0] != asked)
     throw Error("device " + device.name + " (" + device.platform_name + ") ends a kernel's loops after " +
-                std::to_string(probe.loop_trips) + " trips, silently (a limit of Mesa's llvmpipe); cstreams' "
+                std::to_string(counts[0]) + " trips, silently (a limit of Mesa's llvmpipe); cstreams' "
                 "searches may need more, so its results could miss contacts: use another device");
-  return probe;
+  return work_group_size;
 }
 
 // The largest power of two within what the device and its kernels allow, at most the
@@ -92,7 +88,7 @@ Context::Context(const DeviceInfo& device, std::size_t max_work_group_size)
   check(status, "clCreateContext", "opening " + device_.name);
   queue_ = Handle<cl_command_queue>(clCreateCommandQueue(context_.get(), device_.id, CL_QUEUE_PROFILING_ENABLE, &status));
   check(status, "clCreateCommandQueue", "opening " + device_.name);
-  std::size_t limit = probe_device(device_, context_.get(), queue_.get()).work_group_size;
+  std::size_t limit = probe_device(device_, context_.get(), queue_.get());
   if (max_work_group_size) limit = std::min(limit, max_work_group_size);
   work_group_size_ = pick_work_group_size(device_, limit);
   programs_ = std::make_unique<ProgramRegistry>(*this);
