@@ -13,15 +13,9 @@
  * first contact. Running out of work answers "collision" at the earliest time any
  * unexplored box could hold one.
  *
- * Two searches share the rules of one box (cs_visit_box): breadth first across a
- * work-group (refine.cl), where the earliest contact prunes only from one round to the
- * next, so the answer does not depend on scheduling; and depth first within one
- * work-item (cs_conservative), the fallback for queries too wide for a work-group. */
+ * cs_visit_box holds the rules of one box; refine.cl runs the search, breadth first
+ * across the device. */
 #include "trilinear.h"
-
-#ifndef CS_STACK_SIZE
-#define CS_STACK_SIZE 64
-#endif
 
 /* What the search does with one box. */
 #define CS_BOX_DROP 0  /* excluded, or pruned by the earliest contact */
@@ -90,50 +84,6 @@ inline real cs_final_time(real best, const int slack, const real tolerance)
 {
   if (slack) best = fmax((real)0, cs_down(best - tolerance));
   return best <= 1 ? best : 1;
-}
-
-inline uint cs_conservative(const cs_query* q, const int vertex_face, const real tolerance, const real separation,
-                            const uint max_iterations, real* toi)
-{
-  const cs_trilinear f = cs_make_trilinear(q, vertex_face);
-  const real tol = tolerance * cs_query_scale(q);
-  cs_box stack[CS_STACK_SIZE];
-  int top = 0;
-  stack[top++] = cs_root_box();
-  real best = 2; /* no contact yet */
-  int slack = 0;
-  uint status = CS_SEPARATE;
-  uint iterations = 0;
-  while (top > 0) {
-    const cs_box b = stack[--top];
-    int limited = 0;
-    real hit;
-    cs_box lo, hi;
-    const int visit = cs_visit_box(&f, b, vertex_face, tol, tolerance, separation, best, iterations >= max_iterations,
-                                   &slack, &limited, &hit, &lo, &hi);
-    if (visit == CS_BOX_DROP) continue;
-    if (limited) {
-      for (int i = 0; i < top; ++i) hit = fmin(hit, stack[i].t0);
-      best = fmin(best, hit);
-      status = CS_LIMIT;
-      break;
-    }
-    if (visit == CS_BOX_HIT) {
-      best = fmin(best, hit);
-      if (status == CS_SEPARATE) status = CS_COLLIDES;
-      continue;
-    }
-    ++iterations;
-    if (top + 2 > CS_STACK_SIZE) {
-      best = fmin(best, b.t0);
-      status = CS_LIMIT;
-      continue;
-    }
-    stack[top++] = hi;
-    stack[top++] = lo; /* the earlier half (for t splits) is searched first */
-  }
-  *toi = cs_final_time(best, slack, tolerance);
-  return status;
 }
 
 #endif

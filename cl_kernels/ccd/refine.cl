@@ -1,167 +1,141 @@
-/* Refinement of the pairs the conservative screen left open (narrow_phase_pairs.cl).
- * Built with CS_REAL_DOUBLE, CS_STACK_SIZE and, by the scheduler, CS_REGISTRATION and
- * CS_WG_SIZE (the work-group size it launches with, chosen per device).
+/* Refinement of the pairs the conservative screen left open (narrow_phase_pairs.cl),
+ * breadth first across the whole device: a work list (runtime/worklist.h) of
+ * (query, box) items, one box a work-item each round, so one hard query's boxes spread
+ * over as many work-items as it has boxes and no query holds the others up.
+ * Built with CS_REAL_DOUBLE and, by the scheduler, CS_REGISTRATION.
  *
- * cs_refine_breadth_first spreads each query's boxes over a work-group. The group holds
- * several queries at once, each with a fixed number of box positions; a round visits
- * every live box with one work-item each, and the halves of the boxes refined take
- * their places for the next round. The earliest contact found in a round prunes from
- * the next round on, so a query's answer depends on nothing but the query: not on the
- * device, the group, or the queries beside it. A query whose boxes outgrow its
- * positions is emitted as unfinished and starts over where there are more (fewer
- * queries a group, then one, then the depth-first search of cs_refine_depth_first);
- * none is dropped.
- * Groups take queries group id, group id + groups, ..., so no launch size matters
- * beyond speed. */
+ * Rounds are synchronous per query: round r prunes with the earliest contact of rounds
+ * before r and checks the work of rounds before r, never with what round r itself
+ * finds. So a query's answer depends on nothing but the query: not on the device, the
+ * launch size, the order of the list or the queries beside it. The state keeps both
+ * halves of that: best[r % 2] gathers the earliest contact through round r while
+ * round r reads best[(r + 1) % 2]; work[r % 3] counts round r's splits, and each item
+ * carries its query's splits up to two rounds before. */
 #include "conservative.h"
 #include "pairs.h"
 #include "runtime/registration.h"
+#include "runtime/worklist.h"
 
-#define CS_NO_QUERY 0xffffffffu
-/* Box positions of a group, however many work-items it has: each work-item holds
- * CS_PER_ITEM of them, so the search (and its answer) is the same on a device that
- * runs 32 work-items a group as on one that runs 256. */
-#define CS_POSITIONS 256u
-#if CS_WG_SIZE > 256 || 256 % CS_WG_SIZE != 0
-#error "cs_refine_breadth_first needs a power-of-two work-group size of at most 256"
-#endif
-#define CS_PER_ITEM (CS_POSITIONS / CS_WG_SIZE)
-#define CS_MAX_SLOTS (CS_POSITIONS / 8u)
 #define CS_FLAG_SLACK 1u
 #define CS_FLAG_LIMIT 2u
-#define CS_FLAG_OVERFLOW 4u
-#define CS_FLAG_HIT 8u
+/* Budgets beyond the caller's work limit, after which a query answers as out of work:
+ * rounds deeper than any box a precision can still halve in all three parameters for
+ * a useful query, and boxes a query holds at once, which bounds the list's memory when
+ * F vanishes on a whole curve or surface of parameters and the boxes along it double
+ * each round. */
+#define CS_MOST_ROUNDS 1024u
+#define CS_MOST_BOXES 1024u
 
-/* positions: box positions a query holds (a power of two; 0 or CS_POSITIONS and more:
- * all of them, one query a group at a time). */
-__kernel void cs_refine_breadth_first(__global const uint2* pairs, const uint n, const uint vertex_face,
-                                      __global const real* x0, __global const real* x1, __global const uint* faces,
-                                      __global const uint* edges, const uint exact_input, const real tolerance,
-                                      const real separation, const uint max_iterations, const uint positions,
-                                      CS_EMITTER_PARAMS(uint4, contacts), CS_EMITTER_PARAMS(uint2, unfinished))
+#if CS_REAL_DOUBLE
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+/* Times are never negative, so their bits order as they do. */
+typedef ulong cs_key;
+inline cs_key cs_key_of(const real t) { return as_ulong(t); }
+inline real cs_time_of(const cs_key k) { return as_double(k); }
+inline void cs_key_min(volatile __global cs_key* p, const cs_key k)
 {
-  __local cs_box box[CS_POSITIONS];
-  __local real hit[CS_POSITIONS];
-  __local cs_trilinear function[CS_MAX_SLOTS];
-  __local real tol[CS_MAX_SLOTS], best[CS_MAX_SLOTS];
-  __local uint query[CS_MAX_SLOTS], count[CS_MAX_SLOTS], next_count[CS_MAX_SLOTS], flags[CS_MAX_SLOTS],
-      work[CS_MAX_SLOTS];
-  __local uint next_query;
-  CS_EMITTER_BEGIN(contacts);
-  CS_EMITTER_BEGIN(unfinished);
-  const uint lid = get_local_id(0);
-  const uint cap = positions == 0 || positions >= CS_POSITIONS ? CS_POSITIONS : max(positions, CS_POSITIONS / CS_MAX_SLOTS);
-  const uint slots = CS_POSITIONS / cap;
-  if (lid == 0) next_query = get_group_id(0);
-  for (uint sl = lid; sl < slots; sl += CS_WG_SIZE) {
-    query[sl] = CS_NO_QUERY;
-    count[sl] = 0;
-    next_count[sl] = 0;
+  cs_key old = atom_add(p, (cs_key)0);
+  while (k < old) {
+    const cs_key seen = atom_cmpxchg(p, old, k);
+    if (seen == old) break;
+    old = seen;
   }
-  barrier(CLK_LOCAL_MEM_FENCE);
-  for (;;) {
-    /* Free slots take the group's next queries. */
-    for (uint sl = lid; sl < slots; sl += CS_WG_SIZE) {
-      if (query[sl] != CS_NO_QUERY) continue;
-      const uint qi = atomic_add(&next_query, get_num_groups(0));
-      if (qi < n) {
-        const cs_query q = cs_pair_query(pairs[qi], vertex_face, x0, x1, faces, edges, exact_input);
-        query[sl] = qi;
-        function[sl] = cs_make_trilinear(&q, (int)vertex_face);
-        tol[sl] = tolerance * cs_query_scale(&q);
-        best[sl] = 2;
-        flags[sl] = 0;
-        work[sl] = 0;
-        box[sl * cap] = cs_root_box();
-        count[sl] = 1;
-      }
-    }
-    barrier(CLK_LOCAL_MEM_FENCE);
-    uint live = 0;
-    for (uint s = 0; s < slots; ++s) live |= count[s];
-    if (live == 0) break;
+}
+#else
+typedef uint cs_key;
+inline cs_key cs_key_of(const real t) { return as_uint(t); }
+inline real cs_time_of(const cs_key k) { return as_float(k); }
+inline void cs_key_min(volatile __global cs_key* p, const cs_key k)
+{
+  if (k < *p) atomic_min(p, k);
+}
+#endif
 
-    /* One box a position. */
-    int visit[CS_PER_ITEM];
-    uint at[CS_PER_ITEM];
-    cs_box lo[CS_PER_ITEM], hi[CS_PER_ITEM];
-    for (uint k = 0; k < CS_PER_ITEM; ++k) {
-      const uint p = lid + k * CS_WG_SIZE, s = p / cap, j = p % cap;
-      visit[k] = CS_BOX_DROP;
-      at[k] = 0;
-      if (j < count[s]) {
-        const cs_trilinear f = function[s];
-        int slack = 0, limited = 0;
-        real t;
-        visit[k] = cs_visit_box(&f, box[p], (int)vertex_face, tol[s], tolerance, separation, best[s],
-                                work[s] >= max_iterations, &slack, &limited, &t, &lo[k], &hi[k]);
-        hit[p] = visit[k] == CS_BOX_HIT ? t : (real)2;
-        if (slack) atomic_or(&flags[s], CS_FLAG_SLACK);
-        if (limited) atomic_or(&flags[s], CS_FLAG_LIMIT);
-        if (visit[k] == CS_BOX_HIT) atomic_or(&flags[s], CS_FLAG_HIT);
-      }
-      if (visit[k] == CS_BOX_SPLIT) {
-        at[k] = atomic_add(&next_count[s], 2u);
-        if (at[k] + 2 > cap) atomic_or(&flags[s], CS_FLAG_OVERFLOW);
-      }
-    }
-    barrier(CLK_LOCAL_MEM_FENCE); /* every box of this round read */
-    for (uint k = 0; k < CS_PER_ITEM; ++k) {
-      const uint s = (lid + k * CS_WG_SIZE) / cap;
-      if (visit[k] == CS_BOX_SPLIT && at[k] + 2 <= cap) {
-        box[s * cap + at[k]] = lo[k];
-        box[s * cap + at[k] + 1] = hi[k];
-      }
-    }
-    barrier(CLK_LOCAL_MEM_FENCE);
+/* 8 + 6 reals bytes (host: refine_item_bytes). */
+typedef struct {
+  uint query, work;
+  cs_box box;
+} cs_item;
 
-    /* Each slot folds its round in: the earliest contact, and whether it is done. */
-    for (uint sl = lid; sl < slots; sl += CS_WG_SIZE) {
-      if (query[sl] == CS_NO_QUERY) continue;
-      const uint q = query[sl];
-      uint f = flags[sl];
-      if (f & CS_FLAG_HIT) {
-        real b = best[sl];
-        for (uint i = 0; i < count[sl]; ++i) b = fmin(b, hit[sl * cap + i]);
-        best[sl] = b;
-        f &= ~CS_FLAG_HIT;
-      }
-      const uint children = next_count[sl];
-      next_count[sl] = 0;
-      work[sl] += children / 2;
-      int done = children == 0;
-      if (f & CS_FLAG_OVERFLOW) {
-        CS_EMIT(unfinished, pairs[q]);
-        done = 1;
-      } else if (done) {
-        const uint status = (f & CS_FLAG_LIMIT) ? CS_LIMIT : best[sl] <= 1 ? CS_COLLIDES : CS_SEPARATE;
-        if (status != CS_SEPARATE)
-          CS_EMIT(contacts, cs_contact(pairs[q], cs_final_time(best[sl], f & CS_FLAG_SLACK, tolerance), status));
-      }
-      flags[sl] = f;
-      count[sl] = done ? 0 : children;
-      if (done) query[sl] = CS_NO_QUERY;
-    }
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-  CS_EMITTER_END(contacts);
-  CS_EMITTER_END(unfinished);
+/* 2 reals + 16 bytes (host: refine_state_bytes). */
+typedef struct {
+  cs_key best[2];
+  uint work[3];
+  uint flags;
+} cs_refine_state;
+
+#define CS_REFINE_PARAMS                                                                                           \
+  __global const uint2 *pairs, const uint n, const uint vertex_face, __global const real *x0,                     \
+      __global const real *x1, __global const uint *faces, __global const uint *edges, const uint exact_input,     \
+      const real tolerance, const real separation, const uint max_iterations
+
+__kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, __global cs_item* list)
+{
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  cs_item root;
+  root.query = i;
+  root.work = 0;
+  root.box = cs_root_box();
+  list[i] = root;
+  cs_refine_state s;
+  s.best[0] = s.best[1] = cs_key_of(2); /* no contact */
+  s.work[0] = s.work[1] = s.work[2] = 0;
+  s.flags = 0;
+  state[i] = s;
 }
 
-/* The queries too wide for a work-group: the depth-first search, one work-item each. */
-__kernel void cs_refine_depth_first(__global const uint2* pairs, const uint n, const uint vertex_face,
-                                    __global const real* x0, __global const real* x1, __global const uint* faces,
-                                    __global const uint* edges, const uint exact_input, const real tolerance,
-                                    const real separation, const uint max_iterations,
-                                    CS_EMITTER_PARAMS(uint4, contacts))
+__kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state, __global const cs_item* in,
+                              __global cs_item* out, __global uint* counts, const uint round, const uint capacity)
+{
+  __local uint group[2];
+  const uint items = cs_worklist_items(counts, round, capacity);
+  const uint now = round % 2;
+  for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
+    const uint i = base + get_local_id(0);
+    int visit = CS_BOX_DROP;
+    cs_item lo, hi;
+    if (i < items) {
+      const cs_item it = in[i];
+      __global cs_refine_state* s = state + it.query;
+      const real before = cs_time_of(s->best[1 - now]);
+      const uint last_splits = s->work[(round + 2) % 3]; /* this round's boxes, halved */
+      const uint work = it.work + last_splits;
+      s->work[(round + 1) % 3] = 0;
+      const cs_query q = cs_pair_query(pairs[it.query], vertex_face, x0, x1, faces, edges, exact_input);
+      const cs_trilinear f = cs_make_trilinear(&q, (int)vertex_face);
+      int slack = 0, limited = 0;
+      real t = before;
+      visit = cs_visit_box(&f, it.box, (int)vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
+                           work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2, &slack, &limited, &t, &lo.box, &hi.box);
+      cs_key_min(&s->best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
+      if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
+      if (visit == CS_BOX_SPLIT) {
+        atomic_inc(&s->work[round % 3]);
+        lo.query = hi.query = it.query;
+        lo.work = hi.work = work;
+      }
+    }
+    const uint at = cs_worklist_append(group, counts, round, visit == CS_BOX_SPLIT ? 2u : 0u);
+    if (visit == CS_BOX_SPLIT) {
+      if (cs_worklist_fits(counts, capacity, at)) out[at] = lo;
+      if (cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
+    }
+  }
+}
+
+/* Each query's answer, once no box of it is left. */
+__kernel void cs_refine_finish(CS_REFINE_PARAMS, __global const cs_refine_state* state,
+                               CS_EMITTER_PARAMS(uint4, contacts))
 {
   CS_EMITTER_BEGIN(contacts);
   const uint i = get_global_id(0);
   if (i < n) {
-    const cs_query q = cs_pair_query(pairs[i], vertex_face, x0, x1, faces, edges, exact_input);
-    real t;
-    const uint s = cs_conservative(&q, (int)vertex_face, tolerance, separation, max_iterations, &t);
-    if (s != CS_SEPARATE) CS_EMIT(contacts, cs_contact(pairs[i], t, s));
+    const cs_refine_state s = state[i];
+    const real best = fmin(cs_time_of(s.best[0]), cs_time_of(s.best[1]));
+    const uint status = (s.flags & CS_FLAG_LIMIT) ? CS_LIMIT : best <= 1 ? CS_COLLIDES : CS_SEPARATE;
+    if (status != CS_SEPARATE)
+      CS_EMIT(contacts, cs_contact(pairs[i], cs_final_time(best, s.flags & CS_FLAG_SLACK, tolerance), status));
   }
   CS_EMITTER_END(contacts);
 }

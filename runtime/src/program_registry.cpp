@@ -175,13 +175,20 @@ ProgramRegistry::Program& ProgramRegistry::program(const std::string& name, cons
   Handle<cl_program> built(clCreateProgramWithSource(context_.get(), 1, &text, nullptr, &status));
   check(status, "clCreateProgramWithSource", "loading " + name);
 
-  const std::string all_options = device_options_ + (options.empty() ? "" : " " + options);
+  // For profiling: extra options (-cl-nv-verbose reports registers and spills) and a
+  // file that collects every build log.
+  const char* extra = std::getenv("CSTREAMS_BUILD_OPTIONS");
+  const std::string all_options =
+      device_options_ + (options.empty() ? "" : " " + options) + (extra && *extra ? " " + std::string(extra) : "");
   cl_device_id device = context_.device().id;
   status = clBuildProgram(built.get(), 1, &device, all_options.c_str(), nullptr, nullptr);
   if (status == CL_BUILD_PROGRAM_FAILURE || status == CL_INVALID_BUILD_OPTIONS || status == CL_COMPILER_NOT_AVAILABLE)
     throw BuildError(name, context_.device().name, all_options,
                      map_log_locations(build_log(built.get(), device), expansion.origins));
   check(status, "clBuildProgram", "building " + name);
+  if (const char* log = std::getenv("CSTREAMS_BUILD_LOG"); log && *log)
+    std::ofstream(log, std::ios::app) << "== " << name << " " << all_options << "\n"
+                                      << map_log_locations(build_log(built.get(), device), expansion.origins) << "\n";
   return programs_.emplace(key, Program{std::move(built), {}}).first->second;
 }
 

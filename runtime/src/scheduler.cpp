@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <optional>
 
 namespace cstreams::runtime {
 
@@ -32,6 +33,19 @@ struct EmitterState {
   std::uint32_t overflow_slot = no_slot;
 };
 
+// A work list's device side (Worklist in stream_graph.hpp).
+constexpr std::size_t list_words = 8;
+
+struct ListState {
+  Kernel seed, round;
+  Buffer state;
+  Buffer lists[2];  // ping-pong: round r reads lists[r % 2] and appends to the other
+  Buffer counts;    // cl_kernels/runtime/worklist.h: counts[list_words]
+  std::size_t capacity = 0;
+  unsigned rounds = 0;   // that the last run needed: the next run's first batch
+  bool settled = false;  // this run's rounds are done; a rerun of the pass only emits
+};
+
 struct PassState {
   const PassSpec* spec = nullptr;
   Kernel kernel;          // built for the scheduler's registration
@@ -41,6 +55,7 @@ struct PassState {
   const Kernel& active() const { return mode == Registration::global_atomic && atomic_kernel.get() ? atomic_kernel : kernel; }
   std::vector<EmitterState> emitters;
   Buffer keep;
+  std::optional<ListState> list;
   std::vector<StreamId> inputs;
   PassStats stats;
 };
@@ -96,23 +111,31 @@ struct Scheduler::State {
     allocate(s, std::min(grown(needed), std::max(state(s).limit, needed)));
   }
 
-  void bind_args(PassState& p)
+  // The pass's own arguments; returns the index of the next one.
+  unsigned bind_own_args(const PassSpec& spec, const Kernel& k)
   {
-    const Kernel& k = p.active();
     unsigned index = 0;
-    for (const auto& a : p.spec->args) {
+    for (const auto& a : spec.args) {
       if (auto b = std::get_if<BufferArg>(&a)) k.set_arg(index, state(b->stream).buffer);
       else if (auto c = std::get_if<CountArg>(&a)) k.set_arg(index, cl_uint(state(c->stream).count));
       else if (auto v = std::get_if<ValueArg>(&a)) k.set_raw(index, v->bytes.size(), v->bytes.data());
       else {
         const auto& bytes = params.at(std::get<ParamArg>(a).param.index);
         if (bytes.empty())
-          throw Error("pass " + p.spec->name + " needs parameter " +
+          throw Error("pass " + spec.name + " needs parameter " +
                       graph.params()[std::get<ParamArg>(a).param.index].name + ", which was never set");
         k.set_raw(index, bytes.size(), bytes.data());
       }
       ++index;
     }
+    return index;
+  }
+
+  void bind_args(PassState& p)
+  {
+    const Kernel& k = p.active();
+    unsigned index = bind_own_args(*p.spec, k);
+    if (p.list) k.set_arg(index++, p.list->state);
     for (auto& e : p.emitters) {
       auto& dst = state(e.stream);
       if (p.mode == Registration::global_atomic) {
@@ -163,12 +186,81 @@ struct Scheduler::State {
     ensure_capacity(context, e.counts, e.segments * sizeof(cl_uint), "registration counts");
   }
 
+  void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
+  {
+    for (auto& list : l.lists) list = Buffer();  // give the old memory back before taking more
+    for (auto& list : l.lists) list = Buffer(context, std::max<std::size_t>(items, 1) * item_bytes, "work list");
+    l.capacity = items;
+  }
+
+  // Seeds the work list and runs its rounds until one leaves nothing, in batches
+  // between which the host reads the counts once. An overflow grows the lists to what
+  // the largest round asked for and starts again from the seed.
+  void refine(PassState& p, std::size_t n)
+  {
+    const Worklist& w = *p.spec->worklist;
+    ListState& l = *p.list;
+    const std::string& label = p.spec->name;
+    const std::size_t wg = context.work_group_size();
+    ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * w.state_bytes, "work list state");
+    if (n == 0) return;
+    if (l.capacity < n) allocate_lists(l, grown(n), w.item_bytes);
+    // A search deeper than this is a kernel that never settles, not work.
+    constexpr unsigned most_rounds = 1u << 20;
+    for (;;) {
+      context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
+      context.fill_u32(l.counts, 0, 1, list_words - 1, tl());
+      unsigned a = bind_own_args(*p.spec, l.seed);
+      l.seed.set_arg(a++, l.state);
+      l.seed.set_arg(a++, l.lists[0]);
+      context.launch(l.seed, round_up(n, wg), wg, tl(), label);
+      ++p.stats.launches;
+      std::uint32_t counts[list_words] = {};
+      unsigned round = 0, batch = std::max(l.rounds, 1u), next_batch = 8;
+      for (;;) {
+        for (const unsigned last = round + batch; round < last; ++round) {
+          unsigned r = bind_own_args(*p.spec, l.round);
+          l.round.set_arg(r++, l.state);
+          l.round.set_arg(r++, l.lists[round % 2]);
+          l.round.set_arg(r++, l.lists[(round + 1) % 2]);
+          l.round.set_arg(r++, l.counts);
+          l.round.set_arg(r++, cl_uint(round));
+          l.round.set_arg(r++, cl_uint(l.capacity));
+          context.launch(l.round, round_up(w.round_items, wg), wg, tl(), label);
+          ++p.stats.launches;
+        }
+        context.read(l.counts, counts, sizeof counts, 0, tl());
+        ++stats.readbacks;
+        if (counts[3] > l.capacity || counts[round % 3] == 0) break;
+        if (round >= most_rounds)
+          throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[round % 3]) +
+                      " items after " + std::to_string(round) + " rounds");
+        batch = next_batch;
+        next_batch *= 2;
+      }
+      if (counts[3] <= l.capacity) {
+        l.rounds = counts[7];
+        p.stats.rounds = counts[7];
+        p.stats.list_items = std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
+        p.stats.widest_list = counts[6];
+        return;
+      }
+      // Rounds after the one that overflowed saw a cut list and asked for too little.
+      allocate_lists(l, std::max(grown(counts[3]), 2 * l.capacity), w.item_bytes);
+      ++p.stats.reruns;
+    }
+  }
+
   void execute(PassState& p, Redo redo)
   {
     const std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     const std::size_t wg = context.work_group_size();
     const std::size_t global = round_up(n, wg);
     const std::string& label = p.spec->name;
+    if (p.list && !p.list->settled) {
+      refine(p, n);
+      p.list->settled = true;
+    }
     if (redo == Redo::full) {
       // Once a run has fallen back it stays there: its reruns must not try segments again.
       p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
@@ -274,12 +366,13 @@ struct Scheduler::State {
     if (e.segment_capacity > 4 * enough) e.segment_capacity = enough;
   }
 
-  Kernel build_kernel(const PassSpec& spec, Registration mode)
+  Kernel build_kernel(const PassSpec& spec, Registration mode, const std::string& name)
   {
     const std::string define = registration_define(mode);
     const std::string opts = spec.kernel.options.empty() ? define : spec.kernel.options + " " + define;
-    return context.programs().kernel(spec.kernel.program, spec.kernel.kernel, opts);
+    return context.programs().kernel(spec.kernel.program, name, opts);
   }
+  Kernel build_kernel(const PassSpec& spec, Registration mode) { return build_kernel(spec, mode, spec.kernel.kernel); }
 
   bool needs_new_stage(const PassState& p)
   {
@@ -294,6 +387,7 @@ struct Scheduler::State {
     for (auto& p : passes) {
       p.stats = PassStats{p.spec->name};
       p.atomic_this_run = false;
+      if (p.list) p.list->settled = false;
     }
     for (const auto& p : passes)
       for (StreamId s : pass_outputs(*p.spec))
@@ -333,6 +427,7 @@ struct Scheduler::State {
     stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
     for (const auto& p : passes) {
       stats.scratch_bytes += p.keep.bytes();
+      if (p.list) stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
       for (const auto& e : p.emitters) stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
     }
   }
@@ -360,6 +455,12 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     PassState p;
     p.spec = &spec;
     p.kernel = s.build_kernel(spec, options.registration);
+    if (const auto& w = spec.worklist) {
+      auto& l = p.list.emplace();
+      l.seed = s.build_kernel(spec, options.registration, w->seed);
+      l.round = s.build_kernel(spec, options.registration, w->round);
+      l.counts = Buffer(context, list_words * sizeof(std::uint32_t), "work list counts");
+    }
     for (StreamId e : spec.emits) {
       EmitterState es;
       es.stream = e;

@@ -78,6 +78,13 @@ std::vector<std::size_t> StreamGraph::schedule() const
     if (pass.culls() && pass.cull_source != pass.over)
       throw Error("pass " + pass.name + " culls " + stream(pass.cull_source).name + " but is launched over " +
                   stream(pass.over).name);
+    if (const auto& w = pass.worklist) {
+      if (!pass.launches_over_stream() || w->seed.empty() || w->round.empty() || w->item_bytes == 0 ||
+          w->item_bytes % 4 != 0 || w->state_bytes == 0 || w->state_bytes % 4 != 0 || w->round_items == 0 || !pass.updates.empty())
+        throw Error("pass " + pass.name +
+                    " refines a work list but lacks an input stream, a seed or round kernel, a round size or "
+                    "item and state sizes in whole words, or updates a stream in place");
+    }
     for (StreamId s : pass.updates) {
       if (stream(s).variable) throw Error("pass " + pass.name + " updates variable-length stream " + stream(s).name);
       if (!pass.emits.empty() || pass.culls())

@@ -82,7 +82,7 @@ TEST_CASE("a kernel that fails to build is named with its log, and the context b
   const Step step = load_step(scene, 0);
   const auto dir = std::filesystem::temp_directory_path() / "cstreams-broken-kernels";
   std::filesystem::create_directories(dir / "ccd");
-  std::ofstream(dir / "ccd" / "refine.cl") << "__kernel void cs_refine_breadth_first(undeclared_type x) {}\n";
+  std::ofstream(dir / "ccd" / "refine.cl") << "__kernel void cs_refine_round(undeclared_type x) {}\n";
 
   runtime::Context context(filter_from_environment());
   ::setenv("CSTREAMS_KERNEL_DIR", dir.c_str(), 1);

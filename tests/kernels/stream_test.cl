@@ -80,3 +80,47 @@ __kernel void test_times_two(__global uint* values, const uint n)
   const uint i = get_global_id(0);
   if (i < n) values[i] *= 2u;
 }
+
+/* A work list: input i splits into two items a round until depth test_depth(value),
+ * and each leaf counts itself in the input's state, so input i ends with 2^depth. */
+#include "runtime/worklist.h"
+
+uint test_depth(uint value) { return test_hash(value ^ 0x9e3779b9u) % 12u; }
+
+__kernel void test_tree_seed(__global const uint* values, const uint n, __global uint* leaves, __global uint2* list)
+{
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  list[i] = (uint2)(i, 0);
+  leaves[i] = 0;
+}
+
+__kernel void test_tree_round(__global const uint* values, const uint n, __global uint* leaves,
+                              __global const uint2* in, __global uint2* out, __global uint* counts, const uint round,
+                              const uint capacity)
+{
+  __local uint group[2];
+  const uint items = cs_worklist_items(counts, round, capacity);
+  for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
+    const uint i = base + get_local_id(0);
+    uint2 item = (uint2)(0, 0);
+    uint k = 0;
+    if (i < items) {
+      item = in[i];
+      if (item.y < test_depth(values[item.x])) k = 2;
+      else atomic_inc(&leaves[item.x]);
+    }
+    const uint at = cs_worklist_append(group, counts, round, k);
+    for (uint j = 0; j < k; ++j)
+      if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = (uint2)(item.x, item.y + 1);
+  }
+}
+
+__kernel void test_tree_finish(__global const uint* values, const uint n, __global const uint* leaves,
+                               CS_EMITTER_PARAMS(uint2, counted))
+{
+  CS_EMITTER_BEGIN(counted);
+  const uint i = get_global_id(0);
+  if (i < n) CS_EMIT(counted, (uint2)(i, leaves[i]));
+  CS_EMITTER_END(counted);
+}

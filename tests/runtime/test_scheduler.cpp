@@ -187,6 +187,45 @@ TEST_CASE("passes update a fixed stream in place, in declaration order, before i
   }
 }
 
+TEST_CASE("a work list runs its rounds on the device, grows when it overflows and loses no item",
+          "[runtime][scheduler][worklist][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  for (const std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(3001)}) {
+    StreamGraph g;
+    const auto values = g.fixed("values", 4, n);
+    const auto counted = g.variable("counted", 8, 16);
+    g.pass("tree", {program, "test_tree_finish"})
+        .launch_over(values)
+        .refine({"test_tree_seed", "test_tree_round", 8, 4, 2 * ctx.work_group_size()})
+        .emit(counted)
+        .arg(buffer_of(values))
+        .arg(count_of(values));
+    Scheduler s(ctx, g);
+    const auto v = random_values(n, 23);
+    std::vector<Pair> expected;
+    std::uint64_t items = 0;
+    unsigned deepest = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const std::uint32_t depth = cstreams::test::test_hash(v[i] ^ 0x9e3779b9u) % 12u;
+      expected.push_back({i, 1u << depth});
+      items += (std::uint64_t(2) << depth) - 1;
+      deepest = std::max(deepest, depth + 1);
+    }
+    s.upload(values, v);
+    for (int frame = 0; frame < 2; ++frame) {
+      INFO("n = " << n << ", frame " << frame);
+      s.run();
+      CHECK(sorted(s.download<Pair>(counted)) == expected);
+      const PassStats& tree = s.stats().passes.at(0);
+      CHECK(tree.rounds == deepest);
+      CHECK(tree.list_items == items);
+      if (n > 1000) CHECK((frame == 0 ? tree.reruns > 0 : tree.reruns == 0));  // a list sized for the inputs overflows once
+      if (n == 0) CHECK(tree.launches == 1);  // nothing to seed: only the emitting kernel
+    }
+  }
+}
+
 TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
 {
   StreamGraph g;
@@ -227,5 +266,9 @@ TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][sche
   auto out = update_and_emit.variable("out", 4, 1);
   update_and_emit.pass("p", {program, "k"}).launch_over(fx).update(fx).emit(out);
   CHECK_THROWS_WITH(update_and_emit.schedule(), Catch::Contains("may be rerun"));
+
+  StreamGraph list_without_input;
+  list_without_input.pass("p", {program, "k"}).launch_items(4).refine({"seed", "round", 8, 4, 64});
+  CHECK_THROWS_WITH(list_without_input.schedule(), Catch::Contains("pass p refines a work list but lacks"));
   (void)f;
 }

@@ -44,7 +44,8 @@ nlohmann::json to_json(const DeviceInfo& d, bool selected)
           {"local_memory_bytes", d.local_memory},
           {"max_allocation_bytes", d.max_allocation},
           {"max_work_group_size", d.max_work_group_size},
-          {"fp64", d.fp64}};
+          {"fp64", d.fp64},
+          {"int64_atomics", d.int64_atomics}};
 }
 
 void print_text(const DeviceInfo& d, bool selected)
@@ -60,6 +61,7 @@ void print_text(const DeviceInfo& d, bool selected)
               mebibytes(d.local_memory).c_str(), mebibytes(d.max_allocation).c_str());
   std::printf("    work-group     %zu work-items at most\n", d.max_work_group_size);
   std::printf("    fp64           %s\n", d.fp64 ? "yes" : "no");
+  std::printf("    64-bit atomics %s\n", d.int64_atomics ? "yes" : "no");
 }
 
 void run(const DevicesOptions& options)

@@ -90,7 +90,10 @@ struct Report {
 nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_ms)
 {
   nlohmann::json passes = nlohmann::json::object(), streams = nlohmann::json::object();
-  for (const auto& p : s.run.passes) passes[p.name] = {{"ms", p.device_ns * 1e-6}, {"reruns", p.reruns}};
+  for (const auto& p : s.run.passes) {
+    auto& pass = passes[p.name] = {{"ms", p.device_ns * 1e-6}, {"launches", p.launches}, {"reruns", p.reruns}};
+    if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
+  }
   for (const auto& st : s.run.streams)
     streams[st.name] = {{"count", st.count}, {"capacity", st.capacity}, {"bytes", st.bytes}};
   return {{"frame", frame},

@@ -233,32 +233,16 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     const StreamId open = g.variable("open " + name, 8, sized(1024));
     auto& test = g.pass("test " + name, {screen, "cs_screen_pairs", options}).launch_over(input).emit(open).expect_items(0.5);
     real(common(test, input, kind), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
-    // 8 box positions a query, then 64, then the whole work-group; each pass takes what
-    // the one before could not finish.
-    StreamId pending = open;
-    const std::tuple<const char*, const char*, cl_uint> tiers[] = {{"", "wide ", 8}, {"wide ", "wider ", 64}, {"wider ", "widest ", 0}};
-    for (const auto& [taken, left, positions] : tiers) {
-      const bool first = *taken == 0;
-      const StreamId done = first ? found : g.variable("contacts from " + std::string(taken) + name, 16, sized(64));
-      if (!first) contacts.emplace_back(done, kind);
-      const StreamId wider = g.variable(left + name, 8, sized(64));
-      auto& pass = g.pass("refine " + std::string(taken) + name, {refine, "cs_refine_breadth_first", options})
-                       .launch_items(refine_items)
-                       .emit(done)
-                       .emit(wider)
-                       .expect_items(0.25);
-      real(real(common(pass, pending, kind), solver.tolerance), solver.min_separation)
-          .arg(value_of(cl_uint(solver.max_iterations)))
-          .arg(value_of(positions));
-      pending = wider;
-    }
-    const StreamId deep = g.variable("contacts from depth-first " + name, 16, sized(64));
-    contacts.emplace_back(deep, kind);
-    auto& dfs = g.pass("refine depth-first " + name, {refine, "cs_refine_depth_first", options})
-                    .launch_over(pending)
-                    .emit(deep)
-                    .expect_items(0.5);
-    real(real(common(dfs, pending, kind), solver.tolerance), solver.min_separation)
+    // One box a work-item, breadth first across the device (refine.cl): an item is a
+    // query index, its work and a box of six reals; the state of a query two keys of
+    // one real and four words.
+    const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
+    auto& pass = g.pass("refine " + name, {refine, "cs_refine_finish", options})
+                     .launch_over(open)
+                     .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 16, refine_items})
+                     .emit(found)
+                     .expect_items(0.5);
+    real(real(common(pass, open, kind), solver.tolerance), solver.min_separation)
         .arg(value_of(cl_uint(solver.max_iterations)));
   }
   return contacts;

@@ -28,19 +28,10 @@ Precision parse_precision(const std::string& text)
   throw InputError("unknown precision '" + text + "' (single or double)");
 }
 
-namespace {
-
-// Deep enough for the depth-first search to reach boxes as small as the precision
-// allows along the current path; running out still answers conservatively.
-int stack_size(Precision p) { return p == Precision::single ? 96 : 192; }
-
-}  // namespace
-
 std::string solver_build_options(const SolverOptions& o)
 {
   std::string options = "-DCS_REAL_DOUBLE=" + std::to_string(o.precision == Precision::double_) +
-                        " -DCS_SOLVER=" + std::to_string(o.solver == Solver::conservative) +
-                        " -DCS_STACK_SIZE=" + std::to_string(stack_size(o.precision));
+                        " -DCS_SOLVER=" + std::to_string(o.solver == Solver::conservative);
   // Subnormal floats run at a fraction of the speed on CPUs; the float bounds already
   // widen every result by FLT_MIN, which covers anything flushed to zero.
   if (o.precision == Precision::single) options += " -cl-denorms-are-zero";
@@ -117,6 +108,13 @@ void check_solver_options(const runtime::Context& context, const SolverOptions& 
   if (options.precision == Precision::double_ && !context.device().fp64)
     throw InputError("device " + context.device().name +
                      " has no double precision (neither cl_khr_fp64 nor cl_amd_fp64); use single precision");
+  // The conservative search keeps each query's earliest contact with a 64-bit atomic
+  // in double precision (refine.cl).
+  if (options.precision == Precision::double_ && options.solver == Solver::conservative &&
+      !context.device().int64_atomics)
+    throw InputError("device " + context.device().name +
+                     " has no 64-bit atomics (cl_khr_int64_base_atomics), which the conservative solver needs in "
+                     "double precision; use single precision or the cubic solver");
 }
 
 DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& options)

@@ -85,10 +85,9 @@ runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precisi
 // Adds the elementary tests of every candidate stream to a graph and returns the
 // contact streams they emit, with their kinds. The cubic solver is one pass. The
 // conservative one is a screen (the filter and the whole-domain bounds), then
-// breadth-first refinement across work-groups over `refine_items` work-items (8 box
-// positions a query, then 64, then a whole group for those too wide), then a
-// depth-first search for the few still too wide. `sized` gives a variable stream's first capacity
-// from a guess. With mark_limits, a contact that only a solver limit reported carries
+// breadth-first refinement across the device: a work list of (query, box) items whose
+// rounds launch `refine_items` work-items. `sized` gives a variable stream's first
+// capacity from a guess. With mark_limits, a contact that only a solver limit reported carries
 // its time negated (for reports that count limits).
 std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     runtime::StreamGraph& g, const TestInputs& inputs, const SolverOptions& solver, std::size_t refine_items,

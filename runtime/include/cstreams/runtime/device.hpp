@@ -32,6 +32,7 @@ struct DeviceInfo {
   std::size_t max_allocation = 0;
   std::size_t max_work_group_size = 0;
   bool fp64 = false;
+  bool int64_atomics = false;  // cl_khr_int64_base_atomics
   bool correctly_rounded_divide_sqrt = false;
   bool profiling_timer = true;
 

@@ -2,6 +2,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -49,6 +50,26 @@ template <class T> PassArg value_of(const T& v)
   return a;
 }
 
+// Work that refines itself round by round on the device, for a pass launched over a
+// stream of inputs: each input's work is a list of items that a round turns into the
+// next round's items, until a round leaves none. The scheduler launches, with the
+// pass's own arguments first and then these:
+//   seed   over the inputs:    __global S* state, __global I* list
+//          one first item per input (list[i]) and the input's state (state[i]);
+//   round  `round_items` work-items, each group striding over the round's items
+//          (cl_kernels/runtime/worklist.h): __global S* state, __global const I* in,
+//          __global I* out, __global uint* counts, const uint round, const uint capacity;
+//   then the pass's kernel over the inputs: __global S* state, then its emitters.
+// Rounds go in batches with no host round trip between them; the host reads the
+// counts once a batch. A round that overflows the list grows it and the work starts
+// again from the seed, so no item is lost; the state must be a function of the items.
+struct Worklist {
+  std::string seed, round;       // kernel names in the pass's program
+  std::size_t item_bytes = 0;    // I
+  std::size_t state_bytes = 0;   // S, per input
+  std::size_t round_items = 0;   // work-items a round launches
+};
+
 // One kernel over the items of a stream, and what it reads and writes.
 //
 // Kernel signature: the pass's own arguments, then per emitted stream (in emit order)
@@ -70,6 +91,7 @@ struct PassSpec {
   StreamId cull_source, cull_target;  // compaction of cull_source into cull_target
   std::vector<PassArg> args;
   double items_per_work_item = 2;     // expected emissions, to size first segments
+  std::optional<Worklist> worklist;
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
   PassSpec& launch_items(std::size_t n) { items = n; return *this; }
@@ -81,6 +103,7 @@ struct PassSpec {
   PassSpec& cull(StreamId source, StreamId target) { cull_source = source; cull_target = target; return *this; }
   PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
   PassSpec& expect_items(double per_work_item) { items_per_work_item = per_work_item; return *this; }
+  PassSpec& refine(Worklist w) { worklist = std::move(w); return *this; }
   bool culls() const { return cull_source.index != 0xffffffffu; }
 };
 
@@ -118,8 +141,9 @@ public:
   // Pass indices in an order where every stream is written (and updated) before it is
   // read; among passes free to go, declaration order. Throws naming the passes on a
   // cycle, a stream with two writers, a pass that writes what it reads, an update of a
-  // variable stream or by a pass that emits or culls, two passes of one name, or a
-  // culling pass not launched over the stream it culls.
+  // variable stream or by a pass that emits or culls, two passes of one name, a
+  // culling pass not launched over the stream it culls, or a work list without its
+  // kernels, sizes or input stream.
   std::vector<std::size_t> schedule() const;
 
 private:

@@ -1,0 +1,57 @@
+#ifndef CSTREAMS_RUNTIME_WORKLIST_H
+#define CSTREAMS_RUNTIME_WORKLIST_H
+/* The rounds of a work list (Worklist in runtime/stream_graph.hpp), as a round kernel
+ * uses them:
+ *
+ *   __local uint group[2];
+ *   const uint n = cs_worklist_items(counts, round, capacity);
+ *   for (uint base = get_group_id(0) * get_local_size(0); base < n; base += get_global_size(0)) {
+ *     const uint i = base + get_local_id(0);
+ *     ... k: the items this work-item appends (none where i >= n)
+ *     const uint at = cs_worklist_append(group, counts, round, k);  // every work-item of the group
+ *     for (uint j = 0; j < k; ++j) if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = ...;
+ *   }
+ *
+ * counts[r % 3] holds the items of round r. Round r appends to counts[(r + 1) % 3] and
+ * clears counts[(r + 2) % 3], which round r - 1 read and round r + 1 appends to, so no
+ * launch is needed between rounds. An append past the capacity writes nothing and
+ * raises counts[3] to the capacity it needed: the host grows the lists and starts the
+ * work again. For the host's statistics and its next batch, counts[4] and counts[5]
+ * add up the items of all rounds (low and high word), counts[6] keeps the largest
+ * round and counts[7] the number of rounds that had items. */
+
+inline uint cs_worklist_items(__global uint* counts, const uint round, const uint capacity)
+{
+  const uint n = counts[round % 3];
+  if (get_global_id(0) == 0) {
+    counts[(round + 2) % 3] = 0;
+    const uint low = counts[4] + n;
+    if (low < n) ++counts[5];
+    counts[4] = low;
+    counts[6] = max(counts[6], n);
+    if (n) counts[7] = round + 1;
+  }
+  return min(n, capacity);
+}
+
+/* One atomic a group on the global count: the group adds up its items first. */
+inline uint cs_worklist_append(__local uint* group, __global uint* counts, const uint round, const uint k)
+{
+  barrier(CLK_LOCAL_MEM_FENCE); /* the last iteration's readers of group[1] are done */
+  if (get_local_id(0) == 0) group[0] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  const uint at = k ? atomic_add(&group[0], k) : 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (get_local_id(0) == 0) group[1] = group[0] ? atomic_add(&counts[(round + 1) % 3], group[0]) : 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return group[1] + at;
+}
+
+inline int cs_worklist_fits(__global uint* counts, const uint capacity, const uint index)
+{
+  if (index < capacity) return 1;
+  atomic_max(&counts[3], index + 1);
+  return 0;
+}
+
+#endif
