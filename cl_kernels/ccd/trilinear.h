@@ -30,19 +30,30 @@ typedef struct {
 inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
 {
   cs_trilinear f;
-  /* Point roles: vertex-face 0 p, 1 f0, 2 f1, 3 f2; edge-edge 0 a0, 1 a1, 2 b0, 3 b1. */
-  /* A = x_a - x_b, C = x_c0 - x_c1, E = x_e0 - x_e1 at the start; B, D, G the same of the motions. */
-  const int a = 0, b = vertex_face ? 1 : 2, c0 = 1, c1 = vertex_face ? 2 : 0, e0 = vertex_face ? 1 : 2, e1 = 3;
+  /* Point roles: vertex-face 0 p, 1 f0, 2 f1, 3 f2; edge-edge 0 a0, 1 a1, 2 b0, 3 b1.
+   * A = x_a - x_b, C = x_c0 - x_c1, E = x_e0 - x_e1 at the start; B, D, G the same of the
+   * motions. Points are picked by constant indices only: a private array indexed by a
+   * run-time value is kept in memory instead of registers. */
   for (int k = 0; k < 3; ++k) {
-    cs_interval m[4];
-    for (int i = 0; i < 4; ++i) m[i] = cs_isub(q->x[i + 4][k], q->x[i][k]);
+    const cs_interval p0 = q->x[0][k], p1 = q->x[1][k], p2 = q->x[2][k], p3 = q->x[3][k];
+    const cs_interval m0 = cs_isub(q->x[4][k], p0), m1 = cs_isub(q->x[5][k], p1), m2 = cs_isub(q->x[6][k], p2),
+                      m3 = cs_isub(q->x[7][k], p3);
     cs_interval co[6];
-    co[0] = cs_isub(q->x[a][k], q->x[b][k]);
-    co[1] = cs_isub(m[a], m[b]);
-    co[2] = cs_isub(q->x[c0][k], q->x[c1][k]);
-    co[3] = cs_isub(m[c0], m[c1]);
-    co[4] = cs_isub(q->x[e0][k], q->x[e1][k]);
-    co[5] = cs_isub(m[e0], m[e1]);
+    if (vertex_face) {
+      co[0] = cs_isub(p0, p1);
+      co[1] = cs_isub(m0, m1);
+      co[2] = cs_isub(p1, p2);
+      co[3] = cs_isub(m1, m2);
+      co[4] = cs_isub(p1, p3);
+      co[5] = cs_isub(m1, m3);
+    } else {
+      co[0] = cs_isub(p0, p2);
+      co[1] = cs_isub(m0, m2);
+      co[2] = cs_isub(p1, p0);
+      co[3] = cs_isub(m1, m0);
+      co[4] = cs_isub(p2, p3);
+      co[5] = cs_isub(m2, m3);
+    }
     for (int j = 0; j < 6; ++j) {
       const real mid = (real)0.5 * (co[j].lo + co[j].hi);
       f.c[j][k] = mid;
@@ -88,14 +99,17 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
     centre[k] = (real)0.125 * sum;
   }
 
-  /* Corner c has t = c >> 2, u = (c >> 1) & 1, v = c & 1. */
+  /* Corner c has t = c >> 2, u = (c >> 1) & 1, v = c & 1; the j-th pair of corners
+   * across t starts at j, across u at 0, 1, 4, 5, across v at 0, 2, 4, 6. */
   real spread[3] = {0, 0, 0};
-  for (int c = 0; c < 8; ++c)
-    for (int axis = 0; axis < 3; ++axis) {
-      const int bit = 4 >> axis;
-      if (c & bit) continue;
-      for (int k = 0; k < 3; ++k) spread[axis] = fmax(spread[axis], fabs(value[c | bit][k] - value[c][k]));
+  for (int j = 0; j < 4; ++j) {
+    const int u = (j & 1) | ((j & 2) << 1), v = 2 * j;
+    for (int k = 0; k < 3; ++k) {
+      spread[0] = fmax(spread[0], fabs(value[j + 4][k] - value[j][k]));
+      spread[1] = fmax(spread[1], fabs(value[u + 2][k] - value[u][k]));
+      spread[2] = fmax(spread[2], fabs(value[v + 1][k] - value[v][k]));
     }
+  }
   *split = spread[0] >= spread[1] ? (spread[0] >= spread[2] ? 0 : 2) : (spread[1] >= spread[2] ? 1 : 2);
 
   /* Any direction d separates rigorously when d.F is bounded away from zero at every
