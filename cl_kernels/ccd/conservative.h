@@ -5,8 +5,10 @@
  * The contact function F(t, u, v) is bounded over boxes of parameters by bounds that
  * hold for the exact inputs (trilinear.h). A box is dropped when the bounds keep F
  * away from zero along the coordinate axes, along F at the box centre, or along the
- * face (or edge pair) normal; it is a contact when they fit within the tolerance;
- * otherwise it is halved along the parameter F varies most with. Boxes that start
+ * face (or edge pair) normal; it is a contact when they fit within the tolerance, or
+ * within the minimum separation everywhere (every point of it is then a contact) or
+ * at a corner at its start time (a contact right at its start), or at a corner at its
+ * end time when it is no longer than the tolerance in time; otherwise it is halved along the parameter F varies most with. Boxes that start
  * after the earliest contact found are pruned. The tolerance also bounds the time:
  * boxes starting less than `tolerance` before the earliest contact are not refined,
  * and the answer is then moved `tolerance` earlier, so it stays a lower bound of the
@@ -41,11 +43,14 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
     *slack = 1;
   }
   if (vertex_face && b.u0 + b.v0 > 1) return CS_BOX_DROP;
-  real width;
+  real width, farthest, nearest[2];
   int axis;
-  if (!cs_trilinear_bounds(f, b, separation, &width, &axis)) return CS_BOX_DROP;
+  if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, &axis)) return CS_BOX_DROP;
   *hit = b.t0;
-  if (width <= tol) return CS_BOX_HIT;
+  /* |F_k| under separation / sqrt(3) for every k keeps |F| under separation. */
+  const real within = separation * (real)0.57735;
+  if (width <= tol || farthest < within || nearest[0] < within || (nearest[1] < within && b.t1 - b.t0 <= tolerance))
+    return CS_BOX_HIT;
   if (out_of_work) {
     *limited = 1;
     return CS_BOX_HIT;

@@ -33,23 +33,44 @@ __kernel void cs_cubic_pairs(__global const uint2* pairs, const uint n, const ui
   CS_EMITTER_END(contacts);
 }
 
-/* The conservative solver's screen: the filter and the bounds over the whole
- * parameter box settle most pairs at once; the rest are emitted for refinement
- * (refine.cl). */
-__kernel void cs_screen_pairs(__global const uint2* pairs, const uint n, const uint vertex_face,
+/* The conservative solver's screen over every candidate stream at once (up to four,
+ * the unused ones with n = 0), each work-item striding over their concatenation: the
+ * filter and the bounds over the whole parameter box settle most pairs at once; the
+ * rest are emitted as (a, b, vertex_face, 0) for refinement (refine.cl), one list for
+ * all kinds so that its rounds are paid once. */
+__kernel void cs_screen_pairs(__global const uint2* pairs0, const uint n0, const uint vertex_face0,
+                              __global const uint2* pairs1, const uint n1, const uint vertex_face1,
+                              __global const uint2* pairs2, const uint n2, const uint vertex_face2,
+                              __global const uint2* pairs3, const uint n3, const uint vertex_face3,
                               __global const real* x0, __global const real* x1, __global const uint* faces,
                               __global const uint* edges, const uint exact_input, const real separation,
-                              const uint use_filter, CS_EMITTER_PARAMS(uint2, unresolved))
+                              const uint use_filter, CS_EMITTER_PARAMS(uint4, unresolved))
 {
   CS_EMITTER_BEGIN(unresolved);
-  const uint i = get_global_id(0);
-  if (i < n) {
-    const cs_query query = cs_pair_query(pairs[i], vertex_face, x0, x1, faces, edges, exact_input);
+  const uint n = n0 + n1 + n2 + n3;
+  for (uint i = get_global_id(0); i < n; i += get_global_size(0)) {
+    uint2 pair;
+    uint vertex_face;
+    if (i < n0) {
+      pair = pairs0[i];
+      vertex_face = vertex_face0;
+    } else if (i < n0 + n1) {
+      pair = pairs1[i - n0];
+      vertex_face = vertex_face1;
+    } else if (i < n0 + n1 + n2) {
+      pair = pairs2[i - n0 - n1];
+      vertex_face = vertex_face2;
+    } else {
+      pair = pairs3[i - n0 - n1 - n2];
+      vertex_face = vertex_face3;
+    }
+    const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
     if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
       const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
-      real width;
+      real width, farthest, nearest[2];
       int axis;
-      if (cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &axis)) CS_EMIT(unresolved, pairs[i]);
+      if (cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &farthest, nearest, &axis))
+        CS_EMIT(unresolved, (uint4)(pair, vertex_face, 0u));
     }
   }
   CS_EMITTER_END(unresolved);

@@ -21,10 +21,12 @@
 /* Budgets beyond the caller's work limit, after which a query answers as out of work:
  * rounds deeper than any box a precision can still halve in all three parameters for
  * a useful query, and boxes a query holds at once, which bounds the list's memory when
- * F vanishes on a whole curve or surface of parameters and the boxes along it double
- * each round. */
+ * F vanishes (or stays within the separation) on a whole surface of parameters and
+ * the boxes along it double each round. 4096 boxes: at 1024 and 2048, a few queries
+ * of the real steps that the depth-first search used to settle as separate came out as
+ * limits, one more false positive on cloth-funnel (double). */
 #define CS_MOST_ROUNDS 1024u
-#define CS_MOST_BOXES 1024u
+#define CS_MOST_BOXES 4096u
 
 #if CS_REAL_DOUBLE
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
@@ -64,10 +66,11 @@ typedef struct {
   uint flags;
 } cs_refine_state;
 
-#define CS_REFINE_PARAMS                                                                                           \
-  __global const uint2 *pairs, const uint n, const uint vertex_face, __global const real *x0,                     \
-      __global const real *x1, __global const uint *faces, __global const uint *edges, const uint exact_input,     \
-      const real tolerance, const real separation, const uint max_iterations
+/* queries: (a, b, vertex_face, 0) as the screen emits them (narrow_phase_pairs.cl). */
+#define CS_REFINE_PARAMS                                                                                         \
+  __global const uint4 *queries, const uint n, __global const real *x0, __global const real *x1,               \
+      __global const uint *faces, __global const uint *edges, const uint exact_input, const real tolerance,     \
+      const real separation, const uint max_iterations
 
 __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, __global cs_item* list)
 {
@@ -102,11 +105,13 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const uint last_splits = s->work[(round + 2) % 3]; /* this round's boxes, halved */
       const uint work = it.work + last_splits;
       s->work[(round + 1) % 3] = 0;
-      const cs_query q = cs_pair_query(pairs[it.query], vertex_face, x0, x1, faces, edges, exact_input);
-      const cs_trilinear f = cs_make_trilinear(&q, (int)vertex_face);
+      const uint4 query = queries[it.query];
+      const int vertex_face = (int)query.z;
+      const cs_query q = cs_pair_query(query.xy, query.z, x0, x1, faces, edges, exact_input);
+      const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
       int slack = 0, limited = 0;
       real t = before;
-      visit = cs_visit_box(&f, it.box, (int)vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
+      visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
                            work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2, &slack, &limited, &t, &lo.box, &hi.box);
       cs_key_min(&s->best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
@@ -124,18 +129,24 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
   }
 }
 
-/* Each query's answer, once no box of it is left. */
+/* Each query's answer, once no box of it is left, into the contacts of its kind. */
 __kernel void cs_refine_finish(CS_REFINE_PARAMS, __global const cs_refine_state* state,
-                               CS_EMITTER_PARAMS(uint4, contacts))
+                               CS_EMITTER_PARAMS(uint4, vf_contacts), CS_EMITTER_PARAMS(uint4, ee_contacts))
 {
-  CS_EMITTER_BEGIN(contacts);
+  CS_EMITTER_BEGIN(vf_contacts);
+  CS_EMITTER_BEGIN(ee_contacts);
   const uint i = get_global_id(0);
   if (i < n) {
     const cs_refine_state s = state[i];
     const real best = fmin(cs_time_of(s.best[0]), cs_time_of(s.best[1]));
     const uint status = (s.flags & CS_FLAG_LIMIT) ? CS_LIMIT : best <= 1 ? CS_COLLIDES : CS_SEPARATE;
-    if (status != CS_SEPARATE)
-      CS_EMIT(contacts, cs_contact(pairs[i], cs_final_time(best, s.flags & CS_FLAG_SLACK, tolerance), status));
+    if (status != CS_SEPARATE) {
+      const uint4 q = queries[i];
+      const uint4 contact = cs_contact(q.xy, cs_final_time(best, s.flags & CS_FLAG_SLACK, tolerance), status);
+      if (q.z) CS_EMIT(vf_contacts, contact);
+      else CS_EMIT(ee_contacts, contact);
+    }
   }
-  CS_EMITTER_END(contacts);
+  CS_EMITTER_END(vf_contacts);
+  CS_EMITTER_END(ee_contacts);
 }

@@ -66,9 +66,12 @@ inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
 /* Bounds F over the box. Returns 0 when F certainly stays farther than `separation`
  * from zero there: along the coordinate axes, along F at the box centre, or along the
  * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
- * widest side of the bounding box of F and *split to the parameter (0 t, 1 u, 2 v)
- * along which F varies most. */
-inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width, int* split)
+ * widest side of the bounding box of F, *farthest to the largest |F_k| it allows,
+ * nearest[0] and nearest[1] to the largest |F_k| at the corner where that is smallest
+ * among the corners at the box's start and end time, and *split to the parameter
+ * (0 t, 1 u, 2 v) along which F varies most. */
+inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
+                               real* farthest, real nearest[2], int* split)
 {
   real value[8][3], error[8][3];
   for (int c = 0; c < 8; ++c) {
@@ -84,6 +87,17 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
   }
   real centre[3];
   *width = 0;
+  *farthest = 0;
+  nearest[0] = nearest[1] = CS_REAL_MAX;
+  for (int c = 0; c < 4; ++c) {
+    real start = 0, end = 0;
+    for (int k = 0; k < 3; ++k) {
+      start = fmax(start, cs_up(fabs(value[c][k]) + error[c][k]));
+      end = fmax(end, cs_up(fabs(value[c + 4][k]) + error[c + 4][k]));
+    }
+    nearest[0] = fmin(nearest[0], start);
+    nearest[1] = fmin(nearest[1], end);
+  }
   for (int k = 0; k < 3; ++k) {
     real lo = CS_REAL_MAX, hi = -CS_REAL_MAX, sum = 0;
     for (int c = 0; c < 8; ++c) {
@@ -96,6 +110,7 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
     hi = cs_up(hi);
     if (lo > separation || hi < -separation) return 0;
     *width = fmax(*width, hi - lo);
+    *farthest = fmax(*farthest, fmax(-lo, hi));
     centre[k] = (real)0.125 * sum;
   }
 

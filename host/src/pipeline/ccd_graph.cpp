@@ -3,7 +3,6 @@
 #include <cstreams/geometry/float_bounds.hpp>
 
 #include <algorithm>
-#include <tuple>
 
 namespace cstreams {
 
@@ -221,30 +220,61 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     return pair_kernel_args(pass, in, pairs, kind, solver.precision);
   };
   auto real = [&](PassSpec& pass, double x) -> PassSpec& { return real_arg(pass, x, solver.precision); };
-  for (const auto& [input, kind] : in.candidates) {
-    const std::string name = g.stream(input).name;
-    const StreamId found = g.variable("contacts from " + name, 16, sized(256));
-    contacts.emplace_back(found, kind);
-    if (solver.solver == Solver::cubic) {
+  if (solver.solver == Solver::cubic) {
+    for (const auto& [input, kind] : in.candidates) {
+      const std::string name = g.stream(input).name;
+      const StreamId found = g.variable("contacts from " + name, 16, sized(256));
+      contacts.emplace_back(found, kind);
       auto& test = g.pass("test " + name, {screen, "cs_cubic_pairs", options}).launch_over(input).emit(found).expect_items(0.25);
       real(real(common(test, input, kind), solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
-      continue;
     }
-    const StreamId open = g.variable("open " + name, 8, sized(1024));
-    auto& test = g.pass("test " + name, {screen, "cs_screen_pairs", options}).launch_over(input).emit(open).expect_items(0.5);
-    real(common(test, input, kind), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
-    // One box a work-item, breadth first across the device (refine.cl): an item is a
-    // query index, its work and a box of six reals; the state of a query two keys of
-    // one real and four words.
-    const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
-    auto& pass = g.pass("refine " + name, {refine, "cs_refine_finish", options})
-                     .launch_over(open)
-                     .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 16, refine_items})
-                     .emit(found)
-                     .expect_items(0.5);
-    real(real(common(pass, open, kind), solver.tolerance), solver.min_separation)
-        .arg(value_of(cl_uint(solver.max_iterations)));
+    return contacts;
   }
+  // The conservative solver screens every candidate stream in one pass and refines
+  // what is left as one work list, so that its rounds are paid once a step.
+  constexpr std::size_t screen_inputs = 4;  // cs_screen_pairs
+  if (in.candidates.empty() || in.candidates.size() > screen_inputs)
+    throw Error("the conservative screen takes 1 to " + std::to_string(screen_inputs) + " candidate streams, not " +
+                std::to_string(in.candidates.size()));
+  const StreamId open = g.variable("open queries", 16, sized(1024));
+  auto& test = g.pass("test candidates", {screen, "cs_screen_pairs", options})
+                   .launch_items(refine_items)
+                   .emit(open)
+                   .expect_items(2);
+  for (std::size_t k = 0; k < screen_inputs; ++k) {
+    const bool used = k < in.candidates.size();
+    const auto& [input, kind] = in.candidates[used ? k : 0];
+    test.arg(buffer_of(input))
+        .arg(used ? count_of(input) : value_of(cl_uint(0)))
+        .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
+  }
+  test.arg(buffer_of(in.x0))
+      .arg(buffer_of(in.x1))
+      .arg(buffer_of(in.faces))
+      .arg(buffer_of(in.edges))
+      .arg(value_of(cl_uint(solver.precision == Precision::double_)));
+  real(test, solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+
+  const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
+  contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
+  // One box a work-item, breadth first across the device (refine.cl): an item is a
+  // query index, its work and a box of six reals; the state of a query two keys of
+  // one real and four words.
+  const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
+  auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", options})
+                   .launch_over(open)
+                   .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 16, refine_items})
+                   .emit(vf)
+                   .emit(ee)
+                   .expect_items(0.5);
+  pass.arg(buffer_of(open))
+      .arg(count_of(open))
+      .arg(buffer_of(in.x0))
+      .arg(buffer_of(in.x1))
+      .arg(buffer_of(in.faces))
+      .arg(buffer_of(in.edges))
+      .arg(value_of(cl_uint(solver.precision == Precision::double_)));
+  real(real(pass, solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.max_iterations)));
   return contacts;
 }
 
