@@ -47,10 +47,13 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
   int axis;
   if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, &axis)) return CS_BOX_DROP;
   *hit = b.t0;
-  /* |F_k| under separation / sqrt(3) for every k keeps |F| under separation. */
-  const real within = separation * (real)0.57735;
-  if (width <= tol || farthest < within || nearest[0] < within || (nearest[1] < within && b.t1 - b.t0 <= tolerance))
-    return CS_BOX_HIT;
+  if (width <= tol) return CS_BOX_HIT;
+  if (separation > 0) {
+    /* |F_k| under separation / sqrt(3) for every k keeps |F| under separation. */
+    const real within = separation * (real)0.57735;
+    if (farthest < within || nearest[0] < within || (nearest[1] < within && b.t1 - b.t0 <= tolerance))
+      return CS_BOX_HIT;
+  }
   if (out_of_work) {
     *limited = 1;
     return CS_BOX_HIT;

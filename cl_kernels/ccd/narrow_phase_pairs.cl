@@ -34,7 +34,7 @@ __kernel void cs_cubic_pairs(__global const uint2* pairs, const uint n, const ui
 }
 
 /* The conservative solver's screen over every candidate stream at once (up to four,
- * the unused ones with n = 0), each work-item striding over their concatenation: the
+ * the unused ones with n = 0), one work-item a pair of their concatenation: the
  * filter and the bounds over the whole parameter box settle most pairs at once; the
  * rest are emitted as (a, b, vertex_face, 0) for refinement (refine.cl), one list for
  * all kinds so that its rounds are paid once. */
@@ -47,8 +47,8 @@ __kernel void cs_screen_pairs(__global const uint2* pairs0, const uint n0, const
                               const uint use_filter, CS_EMITTER_PARAMS(uint4, unresolved))
 {
   CS_EMITTER_BEGIN(unresolved);
-  const uint n = n0 + n1 + n2 + n3;
-  for (uint i = get_global_id(0); i < n; i += get_global_size(0)) {
+  const uint i = get_global_id(0);
+  if (i < n0 + n1 + n2 + n3) {
     uint2 pair;
     uint vertex_face;
     if (i < n0) {

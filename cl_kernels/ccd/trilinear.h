@@ -68,7 +68,8 @@ inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
  * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
  * widest side of the bounding box of F, *farthest to the largest |F_k| it allows,
  * nearest[0] and nearest[1] to the largest |F_k| at the corner where that is smallest
- * among the corners at the box's start and end time, and *split to the parameter
+ * among the corners at the box's start and end time (with a positive separation
+ * only, where they matter), and *split to the parameter
  * (0 t, 1 u, 2 v) along which F varies most. */
 inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
                                real* farthest, real nearest[2], int* split)
@@ -89,7 +90,7 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
   *width = 0;
   *farthest = 0;
   nearest[0] = nearest[1] = CS_REAL_MAX;
-  for (int c = 0; c < 4; ++c) {
+  for (int c = 0; c < 4 && separation > 0; ++c) {
     real start = 0, end = 0;
     for (int k = 0; k < 3; ++k) {
       start = fmax(start, cs_up(fabs(value[c][k]) + error[c][k]));

@@ -253,7 +253,8 @@ struct Scheduler::State {
 
   void execute(PassState& p, Redo redo)
   {
-    const std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
+    std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
+    for (StreamId s : p.spec->also_over) n += state(s).count;
     const std::size_t wg = context.work_group_size();
     const std::size_t global = round_up(n, wg);
     const std::string& label = p.spec->name;

@@ -53,6 +53,7 @@ std::vector<StreamId> pass_inputs(const PassSpec& p)
 {
   std::vector<StreamId> in = p.reads;
   if (p.launches_over_stream()) in.push_back(p.over);
+  in.insert(in.end(), p.also_over.begin(), p.also_over.end());
   if (p.culls()) in.push_back(p.cull_source);
   const auto outputs = pass_outputs(p);
   for (const auto& a : p.args)
@@ -75,6 +76,10 @@ std::vector<std::size_t> StreamGraph::schedule() const
       throw Error("pass " + pass.name + " is launched over an unknown stream");
     for (std::size_t q = 0; q < p; ++q)
       if (passes_[q].name == pass.name) throw Error("two passes are named " + pass.name);
+    for (StreamId s : pass.also_over)
+      if (s.index >= streams_.size()) throw Error("pass " + pass.name + " is launched over an unknown stream");
+    if ((pass.culls() || pass.worklist) && !pass.also_over.empty())
+      throw Error("pass " + pass.name + " culls or refines a work list, so it must be launched over one stream");
     if (pass.culls() && pass.cull_source != pass.over)
       throw Error("pass " + pass.name + " culls " + stream(pass.cull_source).name + " but is launched over " +
                   stream(pass.over).name);

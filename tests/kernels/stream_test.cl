@@ -124,3 +124,14 @@ __kernel void test_tree_finish(__global const uint* values, const uint n, __glob
   if (i < n) CS_EMIT(counted, (uint2)(i, leaves[i]));
   CS_EMITTER_END(counted);
 }
+
+/* One work-item per item of two streams, the second after the first. */
+__kernel void test_concatenate(__global const uint* a, const uint na, __global const uint* b, const uint nb,
+                               CS_EMITTER_PARAMS(uint, both))
+{
+  CS_EMITTER_BEGIN(both);
+  const uint i = get_global_id(0);
+  if (i < na) CS_EMIT(both, a[i]);
+  else if (i < na + nb) CS_EMIT(both, b[i - na]);
+  CS_EMITTER_END(both);
+}

@@ -226,6 +226,31 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
   }
 }
 
+TEST_CASE("a pass launched over several streams gets a work-item for each of their items", "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  const auto a = g.fixed("a", 4, 0), b = g.fixed("b", 4, 0);
+  const auto both = g.variable("both", 4, 16);
+  g.pass("concatenate", {program, "test_concatenate"})
+      .launch_over({a, b})
+      .emit(both)
+      .arg(buffer_of(a))
+      .arg(count_of(a))
+      .arg(buffer_of(b))
+      .arg(count_of(b));
+  Scheduler s(ctx, g);
+  for (const auto& [na, nb] : {std::pair<std::size_t, std::size_t>{1000, 333}, {0, 77}, {5000, 0}}) {
+    const auto va = random_values(na, 5), vb = random_values(nb, 6);
+    s.upload(a, va);
+    s.upload(b, vb);
+    s.run();
+    auto expected = va;
+    expected.insert(expected.end(), vb.begin(), vb.end());
+    CHECK(sorted(s.download<std::uint32_t>(both)) == sorted(expected));
+  }
+}
+
 TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
 {
   StreamGraph g;

@@ -82,7 +82,8 @@ struct Worklist {
 struct PassSpec {
   std::string name;
   KernelRef kernel{"", ""};
-  StreamId over;                      // one work-item per item of this stream, or
+  StreamId over;                      // one work-item per item of this stream (and of
+  std::vector<StreamId> also_over;    // these, after it, in order), or
   std::size_t items = 0;              // this many work-items when `over` is not set
   std::vector<StreamId> reads;
   std::vector<StreamId> writes;       // fixed-length outputs
@@ -94,6 +95,12 @@ struct PassSpec {
   std::optional<Worklist> worklist;
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
+  PassSpec& launch_over(std::vector<StreamId> streams)
+  {
+    over = streams.at(0);
+    also_over.assign(streams.begin() + 1, streams.end());
+    return *this;
+  }
   PassSpec& launch_items(std::size_t n) { items = n; return *this; }
   bool launches_over_stream() const { return over.index != 0xffffffffu; }
   PassSpec& read(StreamId s) { reads.push_back(s); return *this; }
