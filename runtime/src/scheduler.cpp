@@ -188,7 +188,10 @@ struct Scheduler::State {
 
   void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
   {
-    for (auto& list : l.lists) list = Buffer();  // give the old memory back before taking more
+    // The old memory goes back before more is taken; a failed allocation leaves no
+    // capacity that the buffers do not have.
+    l.capacity = 0;
+    for (auto& list : l.lists) list = Buffer();
     for (auto& list : l.lists) list = Buffer(context, std::max<std::size_t>(items, 1) * item_bytes, "work list");
     l.capacity = items;
   }
