@@ -109,10 +109,11 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const int vertex_face = (int)query.z;
       const cs_query q = cs_pair_query(query.xy, query.z, x0, x1, faces, edges, exact_input);
       const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
+      const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
       int slack = 0, limited = 0;
       real t = before;
       visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
-                           work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2, &slack, &limited, &t, &lo.box, &hi.box);
+                           out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
       cs_key_min(&s->best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
       if (visit == CS_BOX_SPLIT) {
