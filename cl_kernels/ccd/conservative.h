@@ -8,8 +8,9 @@
  * face (or edge pair) normal; it is a contact when they fit within the tolerance, or
  * within the minimum separation everywhere (every point of it is then a contact) or
  * at a corner at its start time (a contact right at its start), or at a corner at its
- * end time when it is no longer than the tolerance in time; otherwise it is halved along the parameter F varies most with. Boxes that start
- * after the earliest contact found are pruned. The tolerance also bounds the time:
+ * end time when it is no longer than the tolerance in time; otherwise it is halved
+ * along the parameter F varies most with. Boxes that start after the earliest contact
+ * found are pruned. The tolerance also bounds the time:
  * boxes starting less than `tolerance` before the earliest contact are not refined,
  * and the answer is then moved `tolerance` earlier, so it stays a lower bound of the
  * first contact. Running out of work answers "collision" at the earliest time any
