@@ -187,18 +187,28 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target
   return front;
 }
 
-runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& in, runtime::StreamId pairs,
-                                    ContactKind kind, Precision precision)
+namespace {
+
+// Positions, topology and exactness, which every kernel over queries takes after its
+// queries.
+runtime::PassSpec& geometry_args(runtime::PassSpec& pass, const TestInputs& in, Precision precision)
 {
   using namespace runtime;
-  return pass.arg(buffer_of(pairs))
-      .arg(count_of(pairs))
-      .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
-      .arg(buffer_of(in.x0))
+  return pass.arg(buffer_of(in.x0))
       .arg(buffer_of(in.x1))
       .arg(buffer_of(in.faces))
       .arg(buffer_of(in.edges))
       .arg(value_of(cl_uint(precision == Precision::double_)));
+}
+
+}  // namespace
+
+runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& in, runtime::StreamId pairs,
+                                    ContactKind kind, Precision precision)
+{
+  using namespace runtime;
+  pass.arg(buffer_of(pairs)).arg(count_of(pairs)).arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
+  return geometry_args(pass, in, precision);
 }
 
 runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precision)
@@ -250,12 +260,7 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
         .arg(used ? count_of(input) : value_of(cl_uint(0)))
         .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
   }
-  test.arg(buffer_of(in.x0))
-      .arg(buffer_of(in.x1))
-      .arg(buffer_of(in.faces))
-      .arg(buffer_of(in.edges))
-      .arg(value_of(cl_uint(solver.precision == Precision::double_)));
-  real(test, solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+  real(geometry_args(test, in, solver.precision), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
 
   const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
   contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
@@ -269,14 +274,8 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
                    .emit(vf)
                    .emit(ee)
                    .expect_items(0.5);
-  pass.arg(buffer_of(open))
-      .arg(count_of(open))
-      .arg(buffer_of(in.x0))
-      .arg(buffer_of(in.x1))
-      .arg(buffer_of(in.faces))
-      .arg(buffer_of(in.edges))
-      .arg(value_of(cl_uint(solver.precision == Precision::double_)));
-  real(real(pass, solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.max_iterations)));
+  pass.arg(buffer_of(open)).arg(count_of(open));
+  real(real(geometry_args(pass, in, solver.precision), solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.max_iterations)));
   return contacts;
 }
 
