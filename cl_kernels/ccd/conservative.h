@@ -8,8 +8,9 @@
  * face (or edge pair) normal; it is a contact when they fit within the tolerance, or
  * within the minimum separation everywhere (every point of it is then a contact) or
  * at a corner at its start time (a contact right at its start), or at a corner at its
- * end time when it is no longer than the tolerance in time; otherwise it is halved
- * along the parameter F varies most with. Boxes that start after the earliest contact
+ * end time when it is no longer than the tolerance in time; otherwise it is narrowed
+ * to where F can still vanish (contract.h) and, unless that took more than half of
+ * some parameter's range, halved along the parameter F varies most with. Boxes that start after the earliest contact
  * found are pruned. The tolerance also bounds the time:
  * boxes starting less than `tolerance` before the earliest contact are not refined,
  * and the answer is then moved `tolerance` earlier, so it stays a lower bound of the
@@ -18,12 +19,22 @@
  *
  * cs_visit_box holds the rules of one box; refine.cl runs the search, breadth first
  * across the device. */
-#include "trilinear.h"
+#include "contract.h"
 
 /* What the search does with one box. */
 #define CS_BOX_DROP 0  /* excluded, or pruned by the earliest contact */
 #define CS_BOX_HIT 1   /* a contact at its start (*hit) */
 #define CS_BOX_SPLIT 2 /* refined: the halves are *lo and *hi, the earlier one (for t) *lo */
+#define CS_BOX_NARROW 3 /* refined: narrowed to *lo alone (contract.h) */
+
+#define CS_NARROWING_PASSES 4
+
+/* Whether b is under half of a along some parameter. */
+inline int cs_box_halved(const cs_box a, const cs_box b)
+{
+  return b.t1 - b.t0 < (real)0.5 * (a.t1 - a.t0) || b.u1 - b.u0 < (real)0.5 * (a.u1 - a.u0) ||
+         b.v1 - b.v0 < (real)0.5 * (a.v1 - a.v0);
+}
 
 /* best: the earliest contact so far (2 for none). out_of_work: the query's work limit
  * is reached, so a box that is not dropped is a contact (*limited set). *slack is set
@@ -59,7 +70,16 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
     *limited = 1;
     return CS_BOX_HIT;
   }
+  /* Narrowing again while it more than halves the box along some parameter: near a
+   * root each pass squares the box's size, for a fraction of a round's cost. */
+  const cs_box whole = b;
+  for (int pass = 0; pass < CS_NARROWING_PASSES; ++pass) {
+    const cs_box before = b;
+    if (!cs_trilinear_contract(f, &b, separation)) return CS_BOX_DROP;
+    if (!cs_box_halved(before, b)) break;
+  }
   *lo = b;
+  if (cs_box_halved(whole, b)) return CS_BOX_NARROW; /* as far along as a halving, with no second box */
   *hi = b;
   if (axis == 0) {
     lo->t1 = hi->t0 = (real)0.5 * (b.t0 + b.t1);

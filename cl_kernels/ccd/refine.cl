@@ -116,17 +116,16 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
                            out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
       cs_key_min(&s->best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
-      if (visit == CS_BOX_SPLIT) {
+      if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
         atomic_inc(&s->work[round % 3]);
         lo.query = hi.query = it.query;
         lo.work = hi.work = work;
       }
     }
-    const uint at = cs_worklist_append(group, counts, round, visit == CS_BOX_SPLIT ? 2u : 0u);
-    if (visit == CS_BOX_SPLIT) {
-      if (cs_worklist_fits(counts, capacity, at)) out[at] = lo;
-      if (cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
-    }
+    const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : 0u;
+    const uint at = cs_worklist_append(group, counts, round, boxes);
+    if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
+    if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
   }
 }
 

@@ -63,6 +63,19 @@ inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
   return f;
 }
 
+/* F_k at parameters t, u, v >= 0 as computed, and *error, the bound on how far the
+ * exact F_k lies from it. */
+inline real cs_trilinear_at(const cs_trilinear* f, const int k, const real t, const real u, const real v,
+                            real* error)
+{
+  const real tu = t * u, tv = t * v;
+  /* A sum of non-negative terms: eleven roundings at most, covered by 8 CS_EPS; and
+   * up to eleven results flushed to zero in the value and as many in the error. */
+  const real e = f->w[0][k] + t * f->w[1][k] + u * f->w[2][k] + tu * f->w[3][k] + v * f->w[4][k] + tv * f->w[5][k];
+  *error = e * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY;
+  return f->c[0][k] + t * f->c[1][k] + u * f->c[2][k] + tu * f->c[3][k] + v * f->c[4][k] + tv * f->c[5][k];
+}
+
 /* Bounds F over the box. Returns 0 when F certainly stays farther than `separation`
  * from zero there: along the coordinate axes, along F at the box centre, or along the
  * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
@@ -77,14 +90,7 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
   real value[8][3], error[8][3];
   for (int c = 0; c < 8; ++c) {
     const real t = (c & 4) ? b.t1 : b.t0, u = (c & 2) ? b.u1 : b.u0, v = (c & 1) ? b.v1 : b.v0;
-    const real tu = t * u, tv = t * v;
-    for (int k = 0; k < 3; ++k) {
-      value[c][k] = f->c[0][k] + t * f->c[1][k] + u * f->c[2][k] + tu * f->c[3][k] + v * f->c[4][k] + tv * f->c[5][k];
-      /* A sum of non-negative terms: eleven roundings at most, covered by 8 CS_EPS; and
-       * up to eleven results flushed to zero in the value and as many in the error. */
-      const real e = f->w[0][k] + t * f->w[1][k] + u * f->w[2][k] + tu * f->w[3][k] + v * f->w[4][k] + tv * f->w[5][k];
-      error[c][k] = e * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY;
-    }
+    for (int k = 0; k < 3; ++k) value[c][k] = cs_trilinear_at(f, k, t, u, v, &error[c][k]);
   }
   real centre[3];
   *width = 0;
