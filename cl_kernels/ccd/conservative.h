@@ -71,9 +71,13 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
     return CS_BOX_HIT;
   }
   /* Narrowing again while it more than halves the box along some parameter: near a
-   * root each pass squares the box's size, for a fraction of a round's cost. */
+   * root each pass squares the box's size, for a fraction of a round's cost. Where F
+   * spans no more than a few separations over the box, the region within the
+   * separation is about as thick as the box, and narrowing only costs: pairs that
+   * hover at the separation are tiled by halving. */
   const cs_box whole = b;
-  for (int pass = 0; pass < CS_NARROWING_PASSES; ++pass) {
+  const int passes = width > (real)4 * separation ? CS_NARROWING_PASSES : 0;
+  for (int pass = 0; pass < passes; ++pass) {
     const cs_box before = b;
     if (!cs_trilinear_contract(f, &b, separation)) return CS_BOX_DROP;
     if (!cs_box_halved(before, b)) break;
