@@ -20,18 +20,12 @@ __kernel void cs_scatter(__global const uint* src, const uint words, __global co
 
 /* Segment s holds counts[s] items. With `interleaved` (lock-free per-thread segments)
  * item j of segment s sits at j * segments + s, so that threads writing their j-th
- * item together touch neighbouring words; otherwise at s * segment_capacity + j.
- * counters[spill_slot] items spilled to the front of dst while the pass ran
- * (runtime/registration.h): the segments go after them, and the stream's count in
- * counters[count_slot], the segments' total from the scan, takes them in. */
+ * item together touch neighbouring words; otherwise at s * segment_capacity + j. */
 __kernel void cs_merge_segments(__global const uint* items, const uint words, __global const uint* counts,
                                 __global const uint* offsets, const uint segments, const uint segment_capacity,
-                                const uint interleaved, __global uint* dst, const uint capacity,
-                                __global uint* counters, const uint spill_slot, const uint count_slot)
+                                const uint interleaved, __global uint* dst, const uint capacity)
 {
   const size_t i = get_global_id(0);
-  const uint spilled = counters[spill_slot];
-  if (i == 0) counters[count_slot] += spilled;
   uint s, j;
   if (interleaved) {
     s = (uint)(i % segments);
@@ -40,7 +34,7 @@ __kernel void cs_merge_segments(__global const uint* items, const uint words, __
     s = (uint)(i / segment_capacity);
     j = (uint)(i % segment_capacity);
   }
-  if (s >= segments || j >= counts[s]) return;
-  const uint o = spilled + offsets[s] + j;
-  if (o >= spilled && o < capacity) cs_copy_item(items, i, dst, o, words);
+  if (s >= segments || j >= min(counts[s], segment_capacity)) return;
+  const uint o = offsets[s] + j;
+  if (o < capacity) cs_copy_item(items, i, dst, o, words);
 }

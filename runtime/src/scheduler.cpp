@@ -30,7 +30,7 @@ struct EmitterState {
   Buffer counts;  // one count per segment
   std::size_t segments = 0;
   std::size_t segment_capacity = 0;
-  std::uint32_t spill_slot = no_slot;  // items that did not fit their segment (registration.h)
+  std::uint32_t overflow_slot = no_slot;
 };
 
 // A work list's device side (Worklist in stream_graph.hpp).
@@ -149,10 +149,8 @@ struct Scheduler::State {
         k.set_arg(index++, e.counts);
         k.set_arg(index++, cl_uint(e.segment_capacity));
         k.set_arg(index++, counters);
-        k.set_arg(index++, cl_uint(e.spill_slot));
+        k.set_arg(index++, cl_uint(e.overflow_slot));
       }
-      k.set_arg(index++, dst.buffer);
-      k.set_arg(index++, cl_uint(dst.capacity));
     }
     if (p.spec->culls()) k.set_arg(index++, p.keep);
   }
@@ -164,9 +162,10 @@ struct Scheduler::State {
         1, std::size_t(std::ceil(spec.items_per_work_item * double(per_group ? context.work_group_size() : 1))));
   }
 
-  // Segments that would not fit one allocation (a first guess far off, say): the pass
-  // registers this run through one global counter instead, slower under contention
-  // but with the stream itself as its only memory.
+  // Segments hold as much as the busiest segment of the last run, so one burst (a
+  // first step searched from the roots, say) can ask for more memory than the device
+  // has. Then the pass registers this run through one global counter instead: slower
+  // under contention, but its memory is the stream itself.
   bool segments_fit(const EmitterState& e, std::size_t global) const
   {
     return segment_count(global) * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation;
@@ -295,7 +294,7 @@ struct Scheduler::State {
         scan.exclusive(e.counts, offsets, e.segments, counters, dst.slot, tl(), label.c_str());
         merge.set_args(e.items, cl_uint(words(e.stream)), e.counts, offsets, cl_uint(e.segments),
                        cl_uint(e.segment_capacity), cl_uint(options.registration == Registration::lock_free),
-                       dst.buffer, cl_uint(dst.capacity), counters, e.spill_slot, dst.slot);
+                       dst.buffer, cl_uint(dst.capacity));
         context.launch(merge, e.segments * e.segment_capacity, wg, tl(), label);
       }
     }
@@ -323,11 +322,13 @@ struct Scheduler::State {
         Redo r = Redo::none;
         for (auto& e : p->emitters) {
           auto& dst = state(e.stream);
+          if (!atomic && host_counters[e.overflow_slot] > e.segment_capacity) {
+            e.segment_capacity = grown(host_counters[e.overflow_slot]);
+            r = Redo::full;
+          }
           if (host_counters[dst.slot] > dst.capacity) {
             grow(e.stream, host_counters[dst.slot]);
-            // Spilled items went to the buffer that was too small; segments are kept.
-            const bool spilled = !atomic && host_counters[e.spill_slot] > 0;
-            r = std::max(r, atomic || spilled ? Redo::full : Redo::pack);
+            r = std::max(r, atomic ? Redo::full : Redo::pack);
           }
         }
         if (p->spec->culls()) {
@@ -344,17 +345,14 @@ struct Scheduler::State {
         const bool atomic = p->mode == Registration::global_atomic;
         if (r == Redo::full)
           for (auto& e : p->emitters)
-            context.fill_u32(counters, 0, atomic ? state(e.stream).slot : e.spill_slot, 1, tl());
+            context.fill_u32(counters, 0, atomic ? state(e.stream).slot : e.overflow_slot, 1, tl());
         execute(*p, r);
         ++p->stats.reruns;
       }
     }
     for (PassState* p : stage)
-      if (p->mode != Registration::global_atomic)
-        for (auto& e : p->emitters) {
-          p->stats.spilled += host_counters[e.spill_slot];
-          size_segments(e, host_counters[state(e.stream).slot]);
-        }
+      if (p->mode == Registration::segmented_lock)
+        for (auto& e : p->emitters) shrink_segments(*p, e, host_counters[e.overflow_slot]);
     for (PassState* p : stage)
       for (StreamId s : pass_outputs(*p->spec))
         if (spec(s).variable) {
@@ -363,15 +361,13 @@ struct Scheduler::State {
         }
   }
 
-  // The next run's segments hold this run's average segment and a quarter more; busier
-  // ones spill. Capacity far beyond that is given back, so a burst (a first step
-  // searched from the roots) does not pin its memory for good.
-  static void size_segments(EmitterState& e, std::size_t emitted)
+  // The next run's segments hold the busiest work-group of this one with room to
+  // spare, no more: a burst (a first step searched from the roots) must not pin its
+  // memory for good.
+  void shrink_segments(const PassState& p, EmitterState& e, std::size_t busiest)
   {
-    if (e.segments == 0) return;
-    const std::size_t average = (emitted + e.segments - 1) / e.segments;
-    const std::size_t enough = average + average / 4 + 1;
-    if (e.segment_capacity < enough || e.segment_capacity > 4 * enough) e.segment_capacity = enough;
+    const std::size_t enough = std::max(first_segment_capacity(*p.spec), grown(busiest));
+    if (e.segment_capacity > 4 * enough) e.segment_capacity = enough;
   }
 
   Kernel build_kernel(const PassSpec& spec, Registration mode, const std::string& name)
@@ -420,14 +416,9 @@ struct Scheduler::State {
     std::map<std::string, std::uint64_t> by_label;
     for (const auto& e : timeline.resolve()) by_label[e.label] += e.nanoseconds;
     std::uint64_t pass_total = 0;
-    stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
     for (auto& p : passes) {
       p.stats.device_ns = by_label[p.spec->name];
       pass_total += p.stats.device_ns;
-      p.stats.scratch_bytes = p.keep.bytes();
-      if (p.list) p.stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
-      for (const auto& e : p.emitters) p.stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
-      stats.scratch_bytes += p.stats.scratch_bytes;
       stats.passes.push_back(p.stats);
     }
     std::uint64_t all = 0;
@@ -436,6 +427,12 @@ struct Scheduler::State {
     for (std::size_t i = 0; i < streams.size(); ++i) {
       const auto& sp = graph.streams()[i];
       stats.streams.push_back({sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes()});
+    }
+    stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
+    for (const auto& p : passes) {
+      stats.scratch_bytes += p.keep.bytes();
+      if (p.list) stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
+      for (const auto& e : p.emitters) stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
     }
   }
 };
@@ -471,7 +468,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     for (StreamId e : spec.emits) {
       EmitterState es;
       es.stream = e;
-      es.spill_slot = slots++;
+      es.overflow_slot = slots++;
       p.emitters.push_back(std::move(es));
     }
     p.inputs = pass_inputs(spec);

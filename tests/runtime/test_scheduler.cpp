@@ -88,22 +88,23 @@ void check_graph(std::size_t n, Registration registration, std::size_t capacity,
     auto kept = scheduler.download<Pair>(t.kept);
     auto even = scheduler.download<std::uint32_t>(t.even);
     auto odd = scheduler.download<Quad>(t.odd);
-    CHECK(sorted(pairs) == sorted(expected.pairs));
-    CHECK(sorted(kept) == sorted(expected.kept));
-    CHECK(sorted(even) == sorted(expected.even));
-    CHECK(sorted(odd) == sorted(expected.odd));
+    if (registration == Registration::lock_free) {
+      // Per-thread segments merged in thread order reproduce the sequential order.
+      CHECK(pairs == expected.pairs);
+      CHECK(kept == expected.kept);
+      CHECK(even == expected.even);
+      CHECK(odd == expected.odd);
+    } else {
+      CHECK(sorted(pairs) == sorted(expected.pairs));
+      CHECK(sorted(kept) == sorted(expected.kept));
+      CHECK(sorted(even) == sorted(expected.even));
+      CHECK(sorted(odd) == sorted(expected.odd));
+    }
     const auto& stats = scheduler.stats();
     if (frame == 1) {
       // Capacities grown in the first frame are kept: the steady state reruns nothing.
       for (const auto& p : stats.passes) CHECK(p.reruns == 0);
       CHECK(stats.readbacks == 3);  // one per stage: after expand, after cull, after split
-      // Segments follow the average, not the bursts of 40: what a burst adds spills.
-      const auto expand = std::find_if(stats.passes.begin(), stats.passes.end(),
-                                       [](const PassStats& p) { return p.name == "expand"; });
-      REQUIRE(expand != stats.passes.end());
-      if (registration != Registration::global_atomic)
-        CHECK(expand->scratch_bytes <= 2 * pairs.size() * sizeof(Pair) + 4 * n + (64u << 10));
-      if (registration == Registration::lock_free && n >= 20000) CHECK(expand->spilled > 0);
     }
   }
 }

@@ -28,8 +28,6 @@ struct PassStats {
   unsigned rounds = 0;
   std::uint64_t list_items = 0;
   std::size_t widest_list = 0;
-  std::size_t scratch_bytes = 0;  // the pass's own: registration segments, cull flags, work lists
-  std::size_t spilled = 0;        // items that did not fit their registration segment
 };
 
 struct StreamStats {
