@@ -416,9 +416,14 @@ struct Scheduler::State {
     std::map<std::string, std::uint64_t> by_label;
     for (const auto& e : timeline.resolve()) by_label[e.label] += e.nanoseconds;
     std::uint64_t pass_total = 0;
+    stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
     for (auto& p : passes) {
       p.stats.device_ns = by_label[p.spec->name];
       pass_total += p.stats.device_ns;
+      p.stats.scratch_bytes = p.keep.bytes();
+      if (p.list) p.stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
+      for (const auto& e : p.emitters) p.stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
+      stats.scratch_bytes += p.stats.scratch_bytes;
       stats.passes.push_back(p.stats);
     }
     std::uint64_t all = 0;
@@ -427,12 +432,6 @@ struct Scheduler::State {
     for (std::size_t i = 0; i < streams.size(); ++i) {
       const auto& sp = graph.streams()[i];
       stats.streams.push_back({sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes()});
-    }
-    stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
-    for (const auto& p : passes) {
-      stats.scratch_bytes += p.keep.bytes();
-      if (p.list) stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
-      for (const auto& e : p.emitters) stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
     }
   }
 };

@@ -105,6 +105,14 @@ void check_graph(std::size_t n, Registration registration, std::size_t capacity,
       // Capacities grown in the first frame are kept: the steady state reruns nothing.
       for (const auto& p : stats.passes) CHECK(p.reruns == 0);
       CHECK(stats.readbacks == 3);  // one per stage: after expand, after cull, after split
+      // Scratch is reported per pass: registration segments where there are any, cull flags.
+      std::size_t per_pass = 0;
+      for (const auto& p : stats.passes) {
+        per_pass += p.scratch_bytes;
+        if (p.name == "cull") CHECK(p.scratch_bytes >= pairs.size() * sizeof(std::uint32_t));
+        if (n > 0 && p.name == "expand") CHECK((p.scratch_bytes > 0) == (registration != Registration::global_atomic));
+      }
+      CHECK(per_pass <= stats.scratch_bytes);
     }
   }
 }

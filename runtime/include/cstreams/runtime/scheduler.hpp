@@ -28,6 +28,7 @@ struct PassStats {
   unsigned rounds = 0;
   std::uint64_t list_items = 0;
   std::size_t widest_list = 0;
+  std::size_t scratch_bytes = 0;  // the pass's own: registration segments, cull flags, work lists
 };
 
 struct StreamStats {
