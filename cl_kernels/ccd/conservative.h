@@ -10,8 +10,8 @@
  * at a corner at its start time (a contact right at its start), or at a corner at its
  * end time when it is no longer than the tolerance in time; otherwise it is narrowed
  * to where F can still vanish (contract.h) and, unless that took more than half of
- * some parameter's range, halved along the parameter F varies most with. Boxes that start after the earliest contact
- * found are pruned. The tolerance also bounds the time:
+ * some parameter's range, halved along the parameter F varies most with. Boxes that
+ * start after the earliest contact found are pruned. The tolerance also bounds the time:
  * boxes starting less than `tolerance` before the earliest contact are not refined,
  * and the answer is then moved `tolerance` earlier, so it stays a lower bound of the
  * first contact. Running out of work answers "collision" at the earliest time any

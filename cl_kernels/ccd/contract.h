@@ -14,7 +14,8 @@
  * I - Y J is small; it needs no rigour, the bounds around it do. */
 #include "trilinear.h"
 
-/* Narrows *b to b ∩ K. Returns 0 when that is empty: F misses S on the box. */
+/* Narrows *b to its intersection with K. Returns 0 when that is empty: F misses S on
+ * the box. */
 inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real separation)
 {
   const real lo[3] = {b->t0, b->u0, b->v0}, hi[3] = {b->t1, b->u1, b->v1};
