@@ -4,7 +4,10 @@
 
 #include <commands.hpp>
 #include <inputs.hpp>
+#include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
+
+#include <nlohmann/json.hpp>
 
 #include <catch2/catch.hpp>
 
@@ -82,6 +85,12 @@ TEST_CASE("numeric flags out of range are refused before any work, naming the fl
              Catch::StartsWith("--resolution = 100000: must be"));
   CHECK_THAT(parse({"generate", "cloth-sphere", "--out", "/tmp/x", "--frames", "-3"}),
              Catch::StartsWith("--frames = -3: must be"));
+  CHECK(parse({"compare", scene[0], "--devices", "pocl"}, &ran) ==
+        "--devices: give at least two device filters to compare");
+  CHECK(!ran);
+  CHECK_THAT(parse({"compare", scene[0], "--devices", "a", "b", "--tolerance", "0"}), Catch::StartsWith("--tolerance"));
+  CHECK_THAT(parse({"compare", scene[0], "--devices", "a", "b", "--plot", "/nonexistent/p.png"}),
+             Catch::StartsWith("--plot /nonexistent/p.png"));
 }
 
 TEST_CASE("output paths are checked when the command line is read", "[cli][quick]")
@@ -120,6 +129,36 @@ TEST_CASE("a run writes its contacts and statistics whole", "[cli][quick]")
   CHECK(lines > 1);  // a header and the step's contacts
   CHECK(fs::file_size(dir / "s.json") > 0);
   for (const auto& e : fs::directory_iterator(dir)) CHECK(e.path().extension() != ".partial");
+}
+
+TEST_CASE("compare runs one scene on several devices and finds their contacts identical", "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-compare";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const auto execute = [](std::vector<std::string> args) {
+    auto cli = cstreams::cli::make_command_line();
+    args.insert(args.begin(), "cstreams");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    cli->app.parse(int(argv.size()), argv.data());
+    cli->command();
+  };
+  // The device the tests run on, named twice: the same filter a user would give.
+  const std::string device = cstreams::filter_from_environment();
+  const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
+  execute({"run", a, b, "--device", device, "--json", (dir / "run.json").string()});
+  execute({"compare", a, b, "--devices", device, device, "--json", (dir / "compare.json").string()});
+  const auto run = nlohmann::json::parse(std::ifstream(dir / "run.json"));
+  const auto compared = nlohmann::json::parse(std::ifstream(dir / "compare.json"));
+  CHECK(compared["identical"] == true);
+  CHECK(compared["differences"].empty());
+  REQUIRE(compared["devices"].size() == 2);
+  for (const auto& d : compared["devices"]) {
+    CHECK(d["contacts"] == run["steps"][0]["contacts"]);
+    CHECK(d["passes"].contains("front update"));
+    CHECK(d["median_device_ms"].get<double>() > 0);
+  }
 }
 
 TEST_CASE("the command-line fuzz corpus parses or is refused", "[cli][fuzz][quick]")

@@ -1,4 +1,5 @@
 #include "commands.hpp"
+#include "plotting.hpp"
 
 #include <cstreams/datasets/datasets.hpp>
 #include <cstreams/devices.hpp>
@@ -17,7 +18,7 @@
 #include <fstream>
 #include <memory>
 
-extern const char* const cstreams_plot_script;
+extern const char* const cstreams_plot_accuracy_script;
 
 namespace cstreams::cli {
 
@@ -183,22 +184,8 @@ void run(const AccuracyOptions& o)
       }
     }
   if (!o.json.empty()) write_file(o.json, out.dump(2) + "\n");
-  if (!o.plot.empty()) {
-    const std::string data = o.plot + ".json", script = o.plot + ".py";
-    write_file(data, out.dump() + "\n");
-    write_file(script, cstreams_plot_script);
-    // The first python3 on PATH may be a private one without the system's matplotlib.
-    int status = -1;
-    std::string command;
-    for (const char* python : {"python3", "/usr/bin/python3"}) {
-      command = std::string(python) + " '" + script + "' '" + data + "' '" + o.plot + "' 2>/dev/null";
-      status = std::system(command.c_str());
-      if (status == 0) break;
-    }
-    std::remove(script.c_str());
-    std::remove(data.c_str());
-    if (status != 0) throw Error("plotting failed (needs python3 with matplotlib): " + command);
-  }
+  if (!o.plot.empty()) draw_plot(cstreams_plot_accuracy_script, out, o.plot);
+
 }
 
 }  // namespace

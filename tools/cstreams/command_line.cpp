@@ -12,6 +12,7 @@ std::unique_ptr<CommandLine> make_command_line()
   add_reference_command(cli->app, cli->command);
   add_accuracy_command(cli->app, cli->command);
   add_run_command(cli->app, cli->command);
+  add_compare_command(cli->app, cli->command);
   return cli;
 }
 

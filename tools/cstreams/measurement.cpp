@@ -1,0 +1,171 @@
+#include "measurement.hpp"
+
+#include "commands.hpp"
+
+#include <cstreams/pipeline/option_checks.hpp>
+#include <cstreams/scenes/generators.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+namespace cstreams::cli {
+
+namespace {
+
+nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_ms)
+{
+  nlohmann::json passes = nlohmann::json::object(), streams = nlohmann::json::object();
+  for (const auto& p : s.run.passes) {
+    auto& pass = passes[p.name] = {
+        {"ms", p.device_ns * 1e-6}, {"launches", p.launches}, {"reruns", p.reruns}, {"scratch_bytes", p.scratch_bytes}};
+    if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
+  }
+  for (const auto& st : s.run.streams)
+    streams[st.name] = {{"count", st.count}, {"capacity", st.capacity}, {"bytes", st.bytes}};
+  return {{"frame", frame},
+          {"host_ms", host_ms},
+          {"device_ms", s.device_ns() * 1e-6},
+          {"readbacks", s.run.readbacks},
+          {"triangle_pairs", s.triangle_pairs},
+          {"vf_candidates", s.vf_candidates},
+          {"ee_candidates", s.ee_candidates},
+          {"contacts", s.contacts},
+          {"front_pairs", s.front_pairs},
+          {"front_level_cap", s.front_level_cap},
+          {"front_retries", s.front_retries},
+          {"device_bytes", s.device_bytes()},
+          {"scratch_bytes", s.run.scratch_bytes},
+          {"passes", passes},
+          {"streams", streams}};
+}
+
+}  // namespace
+
+void add_measure_options(CLI::App& cmd, MeasureOptions& o)
+{
+  cmd.add_option("scene", o.paths,
+                 "A scene manifest (.json), a mesh file, or the frame files of one mesh; default: a bundled "
+                 "cloth-on-sphere scene");
+  cmd.add_flag("--split", o.split, "Treat each connected component of the mesh as an object");
+  cmd.add_option("--solver", o.solver, "conservative (never misses) or cubic (the paper's)");
+  cmd.add_option("--precision", o.precision, "single or double");
+  cmd.add_option("--tolerance", o.tolerance, "Solver tolerance, relative to the query's coordinates");
+  cmd.add_option("--min-separation", o.min_separation, "Distance below which primitives count as colliding");
+  cmd.add_option("--max-iterations", o.max_iterations,
+                 "Conservative solver's work limit per pair; reaching it reports a collision");
+  cmd.add_option("--front", o.front, "BVTT front: none, exact or deferred");
+  cmd.add_option("--front-budget", o.front_budget, "Deferred front: device memory for the front, MiB");
+  cmd.add_option("--registration", o.registration, "segmented-lock, lock-free or global-atomic");
+  cmd.add_option("--frames", o.frames, "Steps A:B (from frame A to B), or one step A; default: all");
+  cmd.add_option("--repeat", o.repeat, "Run each step this many times and report medians (the first is a warm-up)");
+}
+
+DetectorOptions detector_options(const MeasureOptions& o)
+{
+  DetectorOptions options;
+  options.solver.solver = parse_solver(o.solver);
+  options.solver.precision = parse_precision(o.precision);
+  options.solver.tolerance = o.tolerance;
+  options.solver.min_separation = o.min_separation;
+  options.solver.max_iterations = o.max_iterations;
+  options.front = parse_front_mode(o.front);
+  options.front_budget_mb = o.front_budget;
+  options.registration = runtime::parse_registration(o.registration);
+  return options;
+}
+
+void check(const MeasureOptions& o)
+{
+  check_option("--tolerance", o.tolerance, option_ranges::tolerance);
+  check_option("--min-separation", o.min_separation, option_ranges::min_separation);
+  check_option("--max-iterations", o.max_iterations, option_ranges::max_iterations);
+  check_option("--front-budget", o.front_budget, option_ranges::front_budget_mb);
+  check_option("--repeat", o.repeat, {1, 1000000});
+  detector_options(o);
+  parse_step_range(o.frames);
+}
+
+double median(std::vector<double> v)
+{
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+SceneSource::~SceneSource()
+{
+  std::error_code ignored;
+  if (!temporary.empty()) std::filesystem::remove_all(temporary, ignored);
+}
+
+std::unique_ptr<SceneSource> scene_source(const MeasureOptions& o)
+{
+  auto source = std::make_unique<SceneSource>();
+  if (!o.paths.empty()) {
+    source->scene = open_scene(o.paths, o.split);
+    return source;
+  }
+  source->temporary =
+      (std::filesystem::temp_directory_path() / ("cstreams-default-scene-" + std::to_string(::getpid()))).string();
+  // A 30x30 cloth dropped on a static sphere: self-contacts and contacts with the
+  // sphere within a few seconds on any device.
+  source->scene = load_scene(scenes::generate_scene({"cloth-sphere", source->temporary, 1, 24, 30}));
+  return source;
+}
+
+Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t first, std::size_t last,
+                    runtime::Context& context)
+{
+  Measurement m;
+  m.device = context.device().name;
+  m.platform = context.device().platform_name;
+  Detector detector(context, describe(scene, first), detector_options(o));
+  const bool terminal = ::isatty(STDERR_FILENO);
+  for (std::size_t frame = first; frame < last; ++frame) {
+    const Step step = load_step(scene, frame);
+    std::vector<double> host, device;
+    DetectorStats stats;
+    for (unsigned r = 0; r < o.repeat; ++r) {
+      for (std::uint32_t obj = 0; obj < scene.objects.size(); ++obj) {
+        if (scene.objects[obj].kind == ObjectKind::static_) continue;
+        // Steps that follow each other need only the new end; a repeated step both.
+        if (r == 0) detector.set_positions(obj, step.x1[obj]);
+        else detector.set_step(obj, step.x0[obj], step.x1[obj]);
+      }
+      detector.detect();
+      stats = detector.stats();
+      // With repeats, the first run of a step is a warm-up.
+      if (o.repeat == 1 || r > 0) {
+        host.push_back(stats.host_ms);
+        device.push_back(stats.device_ns() * 1e-6);
+        for (const auto& p : stats.run.passes) m.pass_ms[p.name].push_back(p.device_ns * 1e-6);
+      }
+    }
+    if (m.pass_order.empty())
+      for (const auto& p : stats.run.passes) m.pass_order.push_back(p.name);
+    const double host_ms = median(host), device_ms = median(device);
+    m.host_ms.push_back(host_ms);
+    m.device_ms.push_back(device_ms);
+    m.steps.push_back(step_json(frame, stats, host_ms));
+    m.steps.back()["device_ms"] = device_ms;
+    const auto& contacts = detector.contacts();
+    m.contacts.insert(m.contacts.end(), contacts.begin(), contacts.end());
+    m.step_ends.push_back(m.contacts.size());
+    m.peak_bytes = std::max(m.peak_bytes, stats.device_bytes());
+    if (m.first_contact_toi > 1)
+      for (const Contact& c : contacts)
+        if (c.toi < m.first_contact_toi) {
+          m.first_contact_toi = c.toi;
+          m.first_contact_frame = frame;
+        }
+    if (terminal)
+      std::fprintf(stderr, "\rstep %zu/%zu on %s: %zu contacts, %.3f ms   ", frame - first + 1, last - first,
+                   m.device.c_str(), contacts.size(), host_ms);
+  }
+  if (terminal) std::fprintf(stderr, "\n");
+  return m;
+}
+
+}  // namespace cstreams::cli

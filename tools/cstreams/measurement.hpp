@@ -1,0 +1,74 @@
+#pragma once
+// What `run` and `compare` share: the options of a measured run over a scene's steps,
+// and the measurement itself (times per pass and step, memory, contacts) on one device.
+#include <cstreams/contacts.hpp>
+#include <cstreams/detector.hpp>
+#include <cstreams/runtime/context.hpp>
+#include <cstreams/scene/scene.hpp>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cstreams::cli {
+
+struct MeasureOptions {
+  std::vector<std::string> paths;
+  bool split = false;
+  std::string solver = "conservative";
+  std::string precision = "single";
+  std::string front = "exact";
+  std::string registration = "segmented-lock";
+  double tolerance = SolverOptions{}.tolerance;
+  double min_separation = 0;
+  std::uint32_t max_iterations = SolverOptions{}.max_iterations;
+  double front_budget = DetectorOptions{}.front_budget_mb;
+  std::string frames;
+  unsigned repeat = 1;
+};
+
+// Registers the scene and the pipeline's options on a subcommand.
+void add_measure_options(CLI::App& command, MeasureOptions& o);
+// Checks them (InputError naming the flag), without reading the scene.
+void check(const MeasureOptions& o);
+DetectorOptions detector_options(const MeasureOptions& o);
+
+double median(std::vector<double> v);
+
+// The scene to measure: the given one, or the bundled default, generated into a
+// temporary folder that is removed with this object, so that commands run anywhere.
+struct SceneSource {
+  Scene scene;
+  std::string temporary;
+  SceneSource() = default;
+  SceneSource(const SceneSource&) = delete;
+  SceneSource& operator=(const SceneSource&) = delete;
+  ~SceneSource();
+};
+std::unique_ptr<SceneSource> scene_source(const MeasureOptions& o);
+
+// One device's run over steps [first, last): per step JSON, per pass medians, contacts.
+struct Measurement {
+  std::string device, platform;
+  nlohmann::json steps = nlohmann::json::array();
+  std::map<std::string, std::vector<double>> pass_ms;
+  std::vector<std::string> pass_order;
+  std::vector<double> host_ms, device_ms;
+  std::size_t peak_bytes = 0;
+  std::vector<Contact> contacts;      // every step's, in step order, each step canonical
+  std::vector<std::size_t> step_ends;  // where each step's contacts end in `contacts`
+  // The step with the earliest contact of the first step that has one.
+  std::size_t first_contact_frame = 0;
+  double first_contact_toi = 2;
+};
+
+// Runs each step `repeat` times (the first a warm-up when repeating), showing progress
+// on a terminal.
+Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t first, std::size_t last,
+                    runtime::Context& context);
+
+}  // namespace cstreams::cli
