@@ -14,7 +14,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <memory>
 
@@ -185,7 +184,6 @@ void run(const AccuracyOptions& o)
     }
   if (!o.json.empty()) write_file(o.json, out.dump(2) + "\n");
   if (!o.plot.empty()) draw_plot(cstreams_plot_accuracy_script, out, o.plot);
-
 }
 
 }  // namespace
