@@ -11,6 +11,7 @@
  * node against itself has children (l, l + 1), (l, l), (l + 1, l + 1), the first being
  * its first child. The level of (i, j) is depth(i) + depth(j), which grows along
  * every BVTT edge. */
+#include "runtime/loop_trips.h"
 #include "runtime/registration.h"
 #include "bounds.h"
 
@@ -19,6 +20,14 @@
  * the stack holds at most 2 * depth + 1 pairs: 128 covers trees of up to 40 levels,
  * and the host refuses deeper ones. */
 #define CS_BVTT_STACK 128
+
+#if CS_LOOP_TRIPS
+/* On a device that ends loops early (runtime/loop_trips.h), the stack trips a search
+ * may make: each trip may also run the short loops of a box test and an adjacency test
+ * (about twenty trips where the compiler keeps them as loops), and the climbs before
+ * it take a trip a level. */
+#define CS_SEARCH_TRIPS (CS_LOOP_TRIPS / 32u)
+#endif
 
 /* Built with CS_KEEP_FRONT=1 the update emits the next front (front modes exact and
  * deferred); with 0 the front is a fixed set of seeds, searched every step. */
@@ -89,10 +98,15 @@ inline uint cs_level(__global const int4* nodes, const int2 p) { return (uint)(n
  *    where it stops (boxes apart, or two leaves) and the overlapping pairs at the cap,
  *    below which it goes on without emitting.
  * So the next front is again a cut, no deeper than `cap` (0xffffffff: the exact
- * front). Every search emits the pairs of overlapping leaves whose faces share no vertex. */
+ * front). Every search emits the pairs of overlapping leaves whose faces share no vertex.
+ *
+ * On a device that ends loops early, a search that would need more than
+ * CS_SEARCH_TRIPS trips, or whose loops the canary finds cut short, stops and raises
+ * cut[0] (cut[1] holds 1): its outputs are incomplete, and the host runs the step
+ * again from a finer front. */
 __kernel void cs_front_update(__global const int2* front, const uint n, __global const int4* nodes,
                               __global const float* node_boxes, __global const uint* faces, const uint cap,
-                              CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
+                              __global uint* cut, CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
 {
   CS_FRONT_BEGIN;
   CS_EMITTER_BEGIN(pairs);
@@ -119,7 +133,16 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
       int2 stack[CS_BVTT_STACK];
       int top = 0;
       stack[top++] = p;
+#if CS_LOOP_TRIPS
+      uint trips = 0;
+#endif
       while (top > 0) {
+#if CS_LOOP_TRIPS
+        if (++trips > CS_SEARCH_TRIPS) {
+          cut[0] = 1u;
+          break;
+        }
+#endif
         const int2 q = stack[--top];
         const int4 a = nodes[q.x], b = nodes[q.y];
         const uint level = (uint)(a.w + b.w);
@@ -152,6 +175,9 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
       }
     }
   }
+#if CS_LOOP_TRIPS
+  if (cs_loops_were_cut(2u + (n == 0u), cut + 1)) cut[0] = 1u;
+#endif
   CS_FRONT_END;
   CS_EMITTER_END(pairs);
 }

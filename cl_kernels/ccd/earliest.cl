@@ -3,7 +3,11 @@
  * their bits do, so an atomic minimum on the bits is a minimum on the times. */
 #pragma OPENCL FP_CONTRACT OFF
 #if CS_REAL_DOUBLE
+#if CS_FP64_AMD
+#pragma OPENCL EXTENSION cl_amd_fp64 : enable
+#else
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
 #endif
 
 __kernel void cs_clear_earliest(const uint objects, __global uint* earliest)

@@ -6,7 +6,11 @@
 #pragma OPENCL FP_CONTRACT OFF
 
 #if CS_REAL_DOUBLE
+#if CS_FP64_AMD
+#pragma OPENCL EXTENSION cl_amd_fp64 : enable
+#else
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
 typedef double real;
 /* 2^-52: |x| * CS_EPS is at least one ulp of x. CS_TINY covers results that flushed
  * or underflowed to zero (devices may flush subnormals). */

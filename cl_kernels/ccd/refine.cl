@@ -29,6 +29,9 @@
 #define CS_MOST_BOXES 4096u
 
 #if CS_REAL_DOUBLE
+#if !CS_HAS_INT64_ATOMICS
+#error "the conservative solver in double precision needs cl_khr_int64_base_atomics"
+#endif
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 /* Times are never negative, so their bits order as they do. */
 typedef ulong cs_key;
@@ -127,6 +130,7 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
     if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
     if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
   }
+  cs_worklist_check_loops(counts, round);
 }
 
 /* Each query's answer, once no box of it is left, into the contacts of its kind. */

@@ -18,7 +18,13 @@
  * raises counts[3] to the capacity it needed: the host grows the lists and starts the
  * work again. For the host's statistics and its next batch, counts[4] and counts[5]
  * add up the items of all rounds (low and high word), counts[6] keeps the largest
- * round and counts[7] the number of rounds that had items. */
+ * round and counts[7] the number of rounds that had items.
+ *
+ * On a device that ends loops early (CS_LOOP_TRIPS, runtime/loop_trips.h) the host
+ * launches each round over exactly its items, so a work-item makes only one item's
+ * trips; a round kernel ends with cs_worklist_check_loops, which raises counts[8] if its
+ * loops were cut short all the same (counts[9] holds 1) and the host stops. */
+#include "loop_trips.h"
 
 inline uint cs_worklist_items(__global uint* counts, const uint round, const uint capacity)
 {
@@ -52,6 +58,13 @@ inline int cs_worklist_fits(__global uint* counts, const uint capacity, const ui
   if (index < capacity) return 1;
   atomic_max(&counts[3], index + 1);
   return 0;
+}
+
+inline void cs_worklist_check_loops(__global uint* counts, const uint round)
+{
+#if CS_LOOP_TRIPS
+  if (cs_loops_were_cut(2u + (round == 0xffffffffu), counts + 9)) counts[8] = 1u;
+#endif
 }
 
 #endif

@@ -11,23 +11,35 @@ namespace {
 // the scan's local tile (8 items each) within 8 KiB; pocl runs it as a loop.
 constexpr std::size_t preferred_work_group_size = 256;
 
+struct Probed {
+  std::size_t work_group_size = 0;
+  std::uint32_t loop_trip_limit = 0;
+  bool profiling_timer = true;
+};
+
 // What the device does with kernels of the kind the runtime builds (see
 // cl_kernels/runtime/probe.cl), learnt once when a context opens: the work-items a
-// kernel with local memory and barriers may run per group. Throws for a device that
-// ends kernels' loops early.
-std::size_t probe_device(const DeviceInfo& device, cl_context context, cl_command_queue queue)
+// kernel with local memory and barriers may run per group, after how many loop trips
+// in all a work-item's loops end (0: never), and whether profiling events time kernels.
+// Throws for a device that ends loops early in a way the kernels' canary
+// (loop_trips.h) would not notice.
+Probed probe_device(const DeviceInfo& device, cl_context context, cl_command_queue queue)
 {
   const SourceSet& sources = runtime_kernel_sources();
-  const auto source = std::find_if(sources.begin(), sources.end(),
-                                   [](const SourceFile& s) { return std::string(s.name) == "runtime/probe.cl"; });
-  if (source == sources.end()) throw Error("runtime/probe.cl is not embedded in this program");
+  auto text_of = [&](const std::string& name) {
+    const auto source =
+        std::find_if(sources.begin(), sources.end(), [&](const SourceFile& s) { return name == s.name; });
+    if (source == sources.end()) throw Error(name + " is not embedded in this program");
+    return source->text;
+  };
   cl_int status = CL_SUCCESS;
-  const char* text = source->text;
-  Handle<cl_program> program(clCreateProgramWithSource(context, 1, &text, nullptr, &status));
+  const char* texts[] = {text_of("runtime/loop_trips.h"), text_of("runtime/probe.cl")};
+  Handle<cl_program> program(clCreateProgramWithSource(context, 2, texts, nullptr, &status));
   check(status, "clCreateProgramWithSource", "runtime/probe.cl");
   check(clBuildProgram(program.get(), 1, &device.id, "-cl-std=CL1.2", nullptr, nullptr), "clBuildProgram",
         "runtime/probe.cl on " + device.name);
-  std::size_t work_group_size = 0;
+  Probed probed;
+  std::size_t& work_group_size = probed.work_group_size;
   Handle<cl_kernel> group(clCreateKernel(program.get(), "cs_probe_work_group", &status));
   check(status, "clCreateKernel", "cs_probe_work_group");
   check(clGetKernelWorkGroupInfo(group.get(), device.id, CL_KERNEL_WORK_GROUP_SIZE, sizeof work_group_size,
@@ -36,25 +48,50 @@ std::size_t probe_device(const DeviceInfo& device, cl_context context, cl_comman
 
   Handle<cl_kernel> loop(clCreateKernel(program.get(), "cs_probe_loop_trips", &status));
   check(status, "clCreateKernel", "cs_probe_loop_trips");
-  std::uint32_t counts[3] = {0, 1, 1};
-  const std::uint32_t asked = 1u << 17;
+  std::uint32_t counts[4] = {0, 1, 1, 0};
   Handle<cl_mem> buffer(clCreateBuffer(context, CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof counts, counts, &status));
   check(status, "clCreateBuffer", "probing " + device.name);
   cl_mem raw = buffer.get();
   check(clSetKernelArg(loop.get(), 0, sizeof raw, &raw), "clSetKernelArg", "cs_probe_loop_trips");
-  check(clSetKernelArg(loop.get(), 1, sizeof asked, &asked), "clSetKernelArg", "cs_probe_loop_trips");
-  const std::size_t one = 1;
-  check(clEnqueueNDRangeKernel(queue, loop.get(), 1, nullptr, &one, &one, 0, nullptr, nullptr), "clEnqueueNDRangeKernel",
-        "cs_probe_loop_trips on " + device.name);
-  check(clEnqueueReadBuffer(queue, raw, CL_TRUE, 0, sizeof counts, counts, 0, nullptr, nullptr), "clEnqueueReadBuffer",
-        "cs_probe_loop_trips on " + device.name);
-  // The searches of the conservative solver and the stream passes loop as long as their
-  // input asks; a device that cuts loops short would lose contacts without a word.
-  if (counts[0] != asked)
+  // Runs `kernel` over one work-item with `trips` as its second argument; returns its
+  // time as the profiling events say (0 where they say nothing).
+  auto run_one = [&](cl_kernel kernel, const char* name, std::uint32_t trips) {
+    check(clSetKernelArg(kernel, 1, sizeof trips, &trips), "clSetKernelArg", name);
+    const std::size_t one = 1;
+    cl_event raw_event = nullptr;
+    check(clEnqueueNDRangeKernel(queue, kernel, 1, nullptr, &one, &one, 0, nullptr, &raw_event),
+          "clEnqueueNDRangeKernel", std::string(name) + " on " + device.name);
+    Handle<cl_event> event(raw_event);
+    check(clEnqueueReadBuffer(queue, raw, CL_TRUE, 0, sizeof counts, counts, 0, nullptr, nullptr),
+          "clEnqueueReadBuffer", std::string(name) + " on " + device.name);
+    cl_ulong start = 0, end = 0;
+    const bool timed =
+        clGetEventProfilingInfo(raw_event, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr) == CL_SUCCESS &&
+        clGetEventProfilingInfo(raw_event, CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr) == CL_SUCCESS;
+    return timed && end > start ? end - start : cl_ulong(0);
+  };
+  // A timer that times kernels sees twenty thousand volatile loads take over 10 us more
+  // than one (rusticl's report a few nanoseconds, whatever the kernel does).
+  Handle<cl_kernel> timer(clCreateKernel(program.get(), "cs_probe_timer", &status));
+  check(status, "clCreateKernel", "cs_probe_timer");
+  // counts[1] holds 1; the sum goes to counts[0], which the loop probe below rewrites.
+  check(clSetKernelArg(timer.get(), 0, sizeof raw, &raw), "clSetKernelArg", "cs_probe_timer");
+  check(clSetKernelArg(timer.get(), 2, sizeof raw, &raw), "clSetKernelArg", "cs_probe_timer");
+  const cl_ulong short_ns = run_one(timer.get(), "cs_probe_timer", 1);
+  const cl_ulong long_ns = run_one(timer.get(), "cs_probe_timer", 20000);
+  probed.profiling_timer = long_ns > short_ns + 10000;
+  const std::uint32_t asked = 1u << 17;
+  run_one(loop.get(), "cs_probe_loop_trips", asked);
+  if (counts[0] == asked) return probed;
+  // The kernels whose loops run as long as their input asks bound their trips by this
+  // limit and check the canary; a device that cut loops short without the canary
+  // noticing would lose contacts without a word.
+  if (counts[0] == 0 || counts[3] != 1)
     throw Error("device " + device.name + " (" + device.platform_name + ") ends a kernel's loops after " +
-                std::to_string(counts[0]) + " trips, silently (a limit of Mesa's llvmpipe); cstreams' "
-                "searches may need more, so its results could miss contacts: use another device");
-  return work_group_size;
+                std::to_string(counts[0]) + " trips, silently, in a way cstreams cannot detect; its results "
+                "could miss contacts: use another device");
+  probed.loop_trip_limit = counts[0];
+  return probed;
 }
 
 // The largest power of two within what the device and its kernels allow, at most the
@@ -73,12 +110,12 @@ Handle<cl_event> out_event(Timeline* timeline, cl_event& raw)
 }
 }  // namespace
 
-Context::Context(std::string_view filter, std::size_t max_work_group_size)
-    : Context(select_device(filter), max_work_group_size)
+Context::Context(std::string_view filter, std::size_t max_work_group_size, std::uint32_t loop_trip_limit)
+    : Context(select_device(filter), max_work_group_size, loop_trip_limit)
 {
 }
 
-Context::Context(const DeviceInfo& device, std::size_t max_work_group_size)
+Context::Context(const DeviceInfo& device, std::size_t max_work_group_size, std::uint32_t loop_trip_limit)
     : device_(device), memory_limit_(device.global_memory),
       memory_in_use_(std::make_shared<std::atomic<std::size_t>>(0))
 {
@@ -88,8 +125,12 @@ Context::Context(const DeviceInfo& device, std::size_t max_work_group_size)
   check(status, "clCreateContext", "opening " + device_.name);
   queue_ = Handle<cl_command_queue>(clCreateCommandQueue(context_.get(), device_.id, CL_QUEUE_PROFILING_ENABLE, &status));
   check(status, "clCreateCommandQueue", "opening " + device_.name);
-  std::size_t limit = probe_device(device_, context_.get(), queue_.get());
+  const Probed probed = probe_device(device_, context_.get(), queue_.get());
+  std::size_t limit = probed.work_group_size;
   if (max_work_group_size) limit = std::min(limit, max_work_group_size);
+  loop_trip_limit_ = probed.loop_trip_limit;
+  device_.profiling_timer = probed.profiling_timer;
+  if (loop_trip_limit && (!loop_trip_limit_ || loop_trip_limit < loop_trip_limit_)) loop_trip_limit_ = loop_trip_limit;
   work_group_size_ = pick_work_group_size(device_, limit);
   programs_ = std::make_unique<ProgramRegistry>(*this);
   programs_->add_sources(runtime_kernel_sources());

@@ -81,8 +81,15 @@ DeviceInfo describe(cl_platform_id platform, cl_device_id id, std::size_t p, std
   info.local_memory = device_value<cl_ulong>(id, CL_DEVICE_LOCAL_MEM_SIZE);
   info.max_allocation = device_value<cl_ulong>(id, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
   info.max_work_group_size = device_value<std::size_t>(id, CL_DEVICE_MAX_WORK_GROUP_SIZE);
-  info.fp64 = device_value<cl_device_fp_config>(id, CL_DEVICE_DOUBLE_FP_CONFIG) != 0;
-  info.int64_atomics = device_string(id, CL_DEVICE_EXTENSIONS).find("cl_khr_int64_base_atomics") != std::string::npos;
+  const std::string extensions = device_string(id, CL_DEVICE_EXTENSIONS);
+  auto has = [&](const char* extension) { return extensions.find(extension) != std::string::npos; };
+  // AMD's older GPUs (the HD 5870 among them) offer double precision as cl_amd_fp64 only.
+  if (has("cl_khr_fp64") || device_value<cl_device_fp_config>(id, CL_DEVICE_DOUBLE_FP_CONFIG) != 0)
+    info.fp64_extension = "cl_khr_fp64";
+  else if (has("cl_amd_fp64"))
+    info.fp64_extension = "cl_amd_fp64";
+  info.fp64 = !info.fp64_extension.empty();
+  info.int64_atomics = has("cl_khr_int64_base_atomics");
   info.correctly_rounded_divide_sqrt =
       (device_value<cl_device_fp_config>(id, CL_DEVICE_SINGLE_FP_CONFIG) & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
   return info;
@@ -212,6 +219,30 @@ DeviceInfo select_device(const std::vector<DeviceInfo>& devices, std::string_vie
   throw DeviceNotFound("no OpenCL device matches the filter '" + std::string(filter) + "'; " + listing(devices));
 }
 
-DeviceInfo select_device(std::string_view filter) { return select_device(list_devices(), filter); }
+DeviceInfo apply_profile(DeviceInfo device, std::string_view profile)
+{
+  const std::string name = lower(trim(std::string(profile)));
+  if (name.empty()) return device;
+  if (name != "hd5870") throw Error("unknown device profile '" + std::string(profile) + "' (profiles: hd5870)");
+  constexpr std::size_t mib = std::size_t(1) << 20;
+  device.global_memory = std::min(device.global_memory, 1024 * mib);
+  device.max_allocation = std::min(device.max_allocation, 256 * mib);
+  device.local_memory = std::min<std::size_t>(device.local_memory, 32 * 1024);
+  device.max_work_group_size = std::min<std::size_t>(device.max_work_group_size, 256);
+  device.int64_atomics = false;
+  device.profile = name;
+  return device;
+}
+
+std::string profile_from_environment()
+{
+  const char* value = std::getenv("CSTREAMS_DEVICE_PROFILE");
+  return value ? trim(value) : std::string();
+}
+
+DeviceInfo select_device(std::string_view filter)
+{
+  return apply_profile(select_device(list_devices(), filter), profile_from_environment());
+}
 
 }  // namespace cstreams::runtime

@@ -114,6 +114,8 @@ std::string mebibytes(std::size_t bytes)
   return text;
 }
 
+RunStopped::RunStopped(const std::string& pass) : Error("pass " + pass + " stopped the run") {}
+
 StreamLimitExceeded::StreamLimitExceeded(const std::string& stream, std::size_t needed, std::size_t limit)
     : Error("stream " + stream + " needs " + std::to_string(needed) + " items, over its limit of " +
             std::to_string(limit)),

@@ -6,20 +6,28 @@ namespace cstreams::runtime {
 namespace {
 // Items each work-item scans sequentially. GPUs want many work-items and a small tile
 // in local memory; on a CPU every barrier is a loop over the work-group, so pocl does
-// best with long sequential runs and few barriers per item.
-std::size_t scan_items_for(const DeviceInfo& device) { return device.kind == DeviceKind::cpu ? 32 : 8; }
-
-std::string scan_options(const DeviceInfo& device)
+// best with long sequential runs and few barriers per item. The tile (padded, see
+// scan.cl) and the group's scratch must fit the device's local memory.
+std::size_t scan_items_for(const Context& context)
 {
-  return "-DCS_SCAN_ITEMS=" + std::to_string(scan_items_for(device));
+  const std::size_t group = context.work_group_size();
+  auto local_bytes = [&](std::size_t items) {
+    const std::size_t tile = group * items;
+    return 4 * (tile + tile / 32 + group);
+  };
+  std::size_t items = context.device().kind == DeviceKind::cpu ? 32 : 8;
+  while (items > 1 && local_bytes(items) > context.device().local_memory) items /= 2;
+  return items;
 }
+
+std::string scan_options(const Context& context) { return "-DCS_SCAN_ITEMS=" + std::to_string(scan_items_for(context)); }
 }  // namespace
 
 Scan::Scan(Context& context)
     : context_(context),
-      items_per_work_item_(scan_items_for(context.device())),
-      reduce_(context.programs().kernel("runtime/scan.cl", "cs_scan_reduce", scan_options(context.device()))),
-      tiles_(context.programs().kernel("runtime/scan.cl", "cs_scan_tiles", scan_options(context.device())))
+      items_per_work_item_(scan_items_for(context)),
+      reduce_(context.programs().kernel("runtime/scan.cl", "cs_scan_reduce", scan_options(context))),
+      tiles_(context.programs().kernel("runtime/scan.cl", "cs_scan_tiles", scan_options(context)))
 {
 }
 

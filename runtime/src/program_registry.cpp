@@ -63,10 +63,14 @@ std::string map_log_locations(const std::string& log, const std::vector<std::str
   return out + log.substr(last);
 }
 
-std::string derive_device_options(const DeviceInfo& device, std::size_t work_group_size)
+std::string derive_device_options(const DeviceInfo& device, std::size_t work_group_size, std::uint32_t loop_trips)
 {
-  std::string options = "-cl-std=CL1.2 -DCS_WG_SIZE=" + std::to_string(work_group_size);
+  std::string options = "-cl-std=CL1.2 -DCS_WG_SIZE=" + std::to_string(work_group_size) +
+                        " -DCS_LOOP_TRIPS=" + std::to_string(loop_trips) + "u";
   options += device.fp64 ? " -DCS_HAS_FP64=1" : " -DCS_HAS_FP64=0";
+  if (device.fp64_extension == "cl_amd_fp64") options += " -DCS_FP64_AMD=1";
+  // Kernels enable 64-bit atomics only under this (a device profile may take them away).
+  options += device.int64_atomics ? " -DCS_HAS_INT64_ATOMICS=1" : " -DCS_HAS_INT64_ATOMICS=0";
   options += device.is_pocl()     ? " -DCS_VENDOR_POCL=1"
              : device.is_nvidia() ? " -DCS_VENDOR_NVIDIA=1"
              : device.is_amd()    ? " -DCS_VENDOR_AMD=1"
@@ -80,7 +84,7 @@ std::string derive_device_options(const DeviceInfo& device, std::size_t work_gro
 }  // namespace
 
 ProgramRegistry::ProgramRegistry(Context& context)
-    : context_(context), device_options_(derive_device_options(context.device(), context.work_group_size()))
+    : context_(context), device_options_(derive_device_options(context.device(), context.work_group_size(), context.loop_trip_limit()))
 {
 }
 
@@ -212,6 +216,14 @@ Kernel ProgramRegistry::kernel(const std::string& name, const std::string& kerne
     throw Error("kernel " + kernel_name + " of " + name + " runs at most " + std::to_string(max_wg) +
                 " work-items per group on " + context_.device().name + ", fewer than CS_WG_SIZE=" +
                 std::to_string(context_.work_group_size()));
+  cl_ulong local_bytes = 0;
+  check(clGetKernelWorkGroupInfo(k.get(), context_.device().id, CL_KERNEL_LOCAL_MEM_SIZE, sizeof(local_bytes),
+                                 &local_bytes, nullptr),
+        "clGetKernelWorkGroupInfo", "querying kernel " + kernel_name);
+  if (local_bytes > context_.device().local_memory)
+    throw Error("kernel " + kernel_name + " of " + name + " needs " + std::to_string(local_bytes) +
+                " bytes of local memory, more than the " + std::to_string(context_.device().local_memory) + " of " +
+                context_.device().name + (context_.device().profile.empty() ? "" : " (" + context_.device().profile + " profile)"));
   return p.kernels.emplace(kernel_name, Kernel(std::move(k), kernel_name, max_wg)).first->second;
 }
 

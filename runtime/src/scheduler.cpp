@@ -34,7 +34,7 @@ struct EmitterState {
 };
 
 // A work list's device side (Worklist in stream_graph.hpp).
-constexpr std::size_t list_words = 8;
+constexpr std::size_t list_words = 10;
 
 struct ListState {
   Kernel seed, round;
@@ -164,11 +164,13 @@ struct Scheduler::State {
 
   // Segments hold as much as the busiest segment of the last run, so one burst (a
   // first step searched from the roots, say) can ask for more memory than the device
-  // has. Then the pass registers this run through one global counter instead: slower
-  // under contention, but its memory is the stream itself.
+  // has, or than is left of it. Then the pass registers this run through one global
+  // counter instead: slower under contention, but its memory is the stream itself.
   bool segments_fit(const EmitterState& e, std::size_t global) const
   {
-    return segment_count(global) * e.segment_capacity * spec(e.stream).element_bytes <= context.device().max_allocation;
+    const std::size_t bytes = segment_count(global) * e.segment_capacity * spec(e.stream).element_bytes;
+    const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
+    return bytes <= context.device().max_allocation && in_use <= limit && bytes <= limit - in_use;
   }
 
   std::size_t segment_count(std::size_t global) const
@@ -210,16 +212,21 @@ struct Scheduler::State {
     if (l.capacity < n) allocate_lists(l, grown(n), w.item_bytes);
     // A search deeper than this is a kernel that never settles, not work.
     constexpr unsigned most_rounds = 1u << 20;
+    // On a device that ends loops early, each round goes over exactly its items, one a
+    // work-item, so that no work-item strides over many; the host reads the counts
+    // after every round (such devices are CPUs, where a read costs little).
+    const bool bounded_loops = context.loop_trip_limit() != 0;
     for (;;) {
       context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
-      context.fill_u32(l.counts, 0, 1, list_words - 1, tl());
+      context.fill_u32(l.counts, 0, 1, list_words - 2, tl());
+      context.fill_u32(l.counts, 1, list_words - 1, 1, tl());
       unsigned a = bind_own_args(*p.spec, l.seed);
       l.seed.set_arg(a++, l.state);
       l.seed.set_arg(a++, l.lists[0]);
       context.launch(l.seed, round_up(n, wg), wg, tl(), label);
       ++p.stats.launches;
-      std::uint32_t counts[list_words] = {};
-      unsigned round = 0, batch = std::max(l.rounds, 1u), next_batch = 8;
+      std::uint32_t counts[list_words] = {std::uint32_t(n)};
+      unsigned round = 0, batch = bounded_loops ? 1 : std::max(l.rounds, 1u), next_batch = 8;
       for (;;) {
         for (const unsigned last = round + batch; round < last; ++round) {
           unsigned r = bind_own_args(*p.spec, l.round);
@@ -229,17 +236,23 @@ struct Scheduler::State {
           l.round.set_arg(r++, l.counts);
           l.round.set_arg(r++, cl_uint(round));
           l.round.set_arg(r++, cl_uint(l.capacity));
-          context.launch(l.round, round_up(w.round_items, wg), wg, tl(), label);
+          const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
+          context.launch(l.round, round_up(items, wg), wg, tl(), label);
           ++p.stats.launches;
         }
         context.read(l.counts, counts, sizeof counts, 0, tl());
         ++stats.readbacks;
+        if (counts[8])
+          throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
+                      std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
         if (counts[3] > l.capacity || counts[round % 3] == 0) break;
         if (round >= most_rounds)
           throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[round % 3]) +
                       " items after " + std::to_string(round) + " rounds");
-        batch = next_batch;
-        next_batch *= 2;
+        if (!bounded_loops) {
+          batch = next_batch;
+          next_batch *= 2;
+        }
       }
       if (counts[3] <= l.capacity) {
         l.rounds = counts[7];
@@ -405,10 +418,19 @@ struct Scheduler::State {
         stage.clear();
       }
       execute(p, Redo::full);
+      if (p.spec->stops()) stop_if_raised(*p.spec);
       stage.push_back(&p);
     }
     flush(stage);
     collect_stats();
+  }
+
+  void stop_if_raised(const PassSpec& pass)
+  {
+    std::uint32_t flag = 0;
+    context.read(state(pass.stop_flag).buffer, &flag, sizeof flag, 0, tl());
+    ++stats.readbacks;
+    if (flag) throw RunStopped(pass.name);
   }
 
   void collect_stats()

@@ -109,6 +109,9 @@ std::vector<std::size_t> StreamGraph::schedule() const
     for (StreamId s : pass.writes)
       if (stream(s).variable)
         throw Error("pass " + pass.name + " writes variable-length stream " + stream(s).name + " without emitting");
+    if (pass.stops() &&
+        std::find(pass.writes.begin(), pass.writes.end(), pass.stop_flag) == pass.writes.end())
+      throw Error("pass " + pass.name + " stops the run on a flag it does not write");
     if (pass.culls() && !stream(pass.cull_target).variable)
       throw Error("pass " + pass.name + " compacts into fixed-length stream " + stream(pass.cull_target).name);
   }

@@ -199,11 +199,14 @@ TEST_CASE("device candidates equal the host's in float boxes, in every front mod
 
 namespace {
 
-// Contacts of every step of `scene` through one detector fed frame by frame.
+// Contacts of every step of `scene` through one detector fed frame by frame; `retries`
+// adds up the steps' repeated runs.
 std::vector<std::vector<Contact>> run_frames(const Scene& scene, const DetectorOptions& options, std::size_t first,
-                                             std::size_t last, DetectorStats* deepest = nullptr)
+                                             std::size_t last, DetectorStats* deepest = nullptr,
+                                             runtime::Context& context = cstreams::test::device(),
+                                             unsigned* retries = nullptr)
 {
-  Detector detector(cstreams::test::device(), describe(scene, first), options);
+  Detector detector(context, describe(scene, first), options);
   std::vector<std::vector<Contact>> out;
   for (std::size_t frame = first; frame < last; ++frame) {
     for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
@@ -211,6 +214,7 @@ std::vector<std::vector<Contact>> run_frames(const Scene& scene, const DetectorO
     detector.detect();
     out.push_back(detector.contacts());
     if (deepest && detector.stats().front_pairs >= deepest->front_pairs) *deepest = detector.stats();
+    if (retries) *retries += detector.stats().front_retries;
   }
   return out;
 }
@@ -260,6 +264,32 @@ TEST_CASE("front modes, registrations and tiny capacities report identical conta
   CHECK(same(run_frames(cloth, options, 10, 29), expected));
 }
 
+TEST_CASE("a device that ends loops early reports the same contacts, searching from finer fronts",
+          "[detector][quick]")
+{
+  // Mesa's llvmpipe ends a work-item's loops after 65535 trips in all. A context asked
+  // for a far lower limit makes any device work as if it did: a search that runs out of
+  // trips stops the step, which runs again from a front four times finer, and the
+  // refinement's rounds go over exactly their items.
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 30, 30);
+  runtime::Context limited(filter_from_environment(), 0, 2048);
+  REQUIRE(limited.loop_trip_limit() == 2048);
+  DetectorOptions options;
+  // Searches of 64 trips need a front finer than the default budget holds; a deferred
+  // front that cannot get fine enough within its budget is an error (below).
+  options.front_budget_mb = 64;
+  for (auto front : {FrontMode::none, FrontMode::exact, FrontMode::deferred}) {
+    INFO(to_string(front));
+    options.front = front;
+    unsigned retries = 0;
+    CHECK(same(run_frames(cloth, options, 10, 16, nullptr, limited, &retries), run_frames(cloth, options, 10, 16)));
+    CHECK(retries > 0);
+  }
+  options.front_budget_mb = 2;
+  CHECK_THROWS_WITH(run_frames(cloth, options, 10, 11, nullptr, limited),
+                    Catch::Contains("runs out of the device's loop trips") && Catch::Contains("within the front's budget"));
+}
+
 TEST_CASE("device contacts equal the solver's on the host's candidates, in both precisions", "[detector][quick]")
 {
   const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 36, 40);
@@ -271,6 +301,13 @@ TEST_CASE("device contacts equal the solver's on the host's candidates, in both 
     INFO(to_string(precision));
     DetectorOptions options;
     options.solver.precision = precision;
+    const auto& device = cstreams::test::device().device();
+    if (precision == Precision::double_ && !(device.fp64 && device.int64_atomics)) {
+      CHECK_THROWS_WITH(Detector(cstreams::test::device(), describe(cloth, 33), options),
+                        Catch::Contains(device.fp64 ? "(cl_khr_int64_base_atomics), which the conservative solver needs"
+                                                    : "neither cl_khr_fp64 nor cl_amd_fp64"));
+      continue;
+    }
     Detector detector(cstreams::test::device(), describe(cloth, 33), options);
     run_step(detector, step);
     std::vector<Contact> expected;
@@ -351,7 +388,7 @@ TEST_CASE("contacts do not depend on the work-group size a device runs", "[detec
   runtime::Context small(filter_from_environment(), 32);
   REQUIRE(small.work_group_size() == 32);
   for (Precision precision : {Precision::single, Precision::double_}) {
-    if (precision == Precision::double_ && !small.device().fp64) continue;
+    if (precision == Precision::double_ && !(small.device().fp64 && small.device().int64_atomics)) continue;
     DetectorOptions options;
     options.solver.precision = precision;
     Detector a(cstreams::test::device(), describe(scene, 0), options), b(small, describe(scene, 0), options);

@@ -16,10 +16,13 @@ using namespace cstreams;
 
 namespace {
 
+// The precisions the conservative solver runs in on the test device: double needs
+// double precision and 64-bit atomics (the HD 5870 profile has the first only).
 std::vector<Precision> precisions()
 {
   std::vector<Precision> p{Precision::single};
-  if (cstreams::test::device().device().fp64) p.push_back(Precision::double_);
+  const auto& d = cstreams::test::device().device();
+  if (d.fp64 && d.int64_atomics) p.push_back(Precision::double_);
   return p;
 }
 
@@ -186,6 +189,30 @@ TEST_CASE("constructed degenerate cases: the conservative solver misses none", "
       }
     }
   }
+}
+
+TEST_CASE("without 64-bit atomics the conservative solver refuses double precision, naming the extension",
+          "[narrow][quick]")
+{
+  runtime::Context hd(runtime::apply_profile(runtime::select_device(runtime::filter_from_environment()), "hd5870"));
+  REQUIRE(!hd.device().int64_atomics);
+  SolverOptions options;
+  options.precision = Precision::double_;
+  if (!hd.device().fp64) {
+    CHECK_THROWS_WITH(DeviceSolver(hd, options), Catch::Contains("neither cl_khr_fp64 nor cl_amd_fp64"));
+    return;
+  }
+  CHECK_THROWS_WITH(DeviceSolver(hd, options), Catch::Contains("(cl_khr_int64_base_atomics), which the conservative"));
+  // Were the host's check bypassed, the kernel itself would not build.
+  hd.programs().add_sources(ccd_kernel_sources());
+  CHECK_THROWS_WITH(hd.programs().kernel("ccd/refine.cl", "cs_refine_round", "-DCS_REAL_DOUBLE=1 -DCS_REGISTRATION=0"),
+                    Catch::Contains("needs cl_khr_int64_base_atomics"));
+  options.solver = Solver::cubic;
+  DeviceSolver cubic(hd, options);
+  const Vec3 in(0.25, 0.25, 0);
+  const auto result =
+      cubic.solve(ContactKind::vertex_face, {query({in + Vec3(0, 0, 0.3), A, B, C}, {in - Vec3(0, 0, 0.7), A, B, C})});
+  CHECK(result.at(0).collides());
 }
 
 TEST_CASE("the time of impact is a lower bound of the first contact", "[narrow][quick]")

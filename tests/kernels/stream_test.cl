@@ -114,6 +114,7 @@ __kernel void test_tree_round(__global const uint* values, const uint n, __globa
     for (uint j = 0; j < k; ++j)
       if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = (uint2)(item.x, item.y + 1);
   }
+  cs_worklist_check_loops(counts, round);
 }
 
 __kernel void test_tree_finish(__global const uint* values, const uint n, __global const uint* leaves,

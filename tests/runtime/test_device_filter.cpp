@@ -71,3 +71,36 @@ TEST_CASE("the installed devices are discovered with their properties", "[runtim
   CHECK(chosen.max_work_group_size > 0);
   CHECK_THAT(chosen.opencl_c_version, Catch::StartsWith("OpenCL C"));
 }
+
+TEST_CASE("the HD 5870 profile lowers what a device offers to that card's, and no further", "[runtime][device][quick]")
+{
+  DeviceInfo big = make(1, 0, "NVIDIA CUDA", "NVIDIA H200", "NVIDIA Corporation", DeviceKind::gpu);
+  big.global_memory = std::size_t(140) << 30;
+  big.max_allocation = std::size_t(35) << 30;
+  big.local_memory = 48 << 10;
+  big.max_work_group_size = 1024;
+  big.fp64 = big.int64_atomics = true;
+  big.fp64_extension = "cl_khr_fp64";
+  const DeviceInfo hd = apply_profile(big, "HD5870");
+  CHECK(hd.global_memory == std::size_t(1) << 30);
+  CHECK(hd.max_allocation == std::size_t(256) << 20);
+  CHECK(hd.local_memory == 32 << 10);
+  CHECK(hd.max_work_group_size == 256);
+  CHECK(!hd.int64_atomics);
+  CHECK(hd.fp64);
+  CHECK(hd.profile == "hd5870");
+
+  DeviceInfo small = big;
+  small.max_allocation = std::size_t(128) << 20;
+  small.max_work_group_size = 32;
+  small.fp64 = false;
+  small.fp64_extension.clear();
+  const DeviceInfo still_small = apply_profile(small, "hd5870");
+  CHECK(still_small.max_allocation == std::size_t(128) << 20);
+  CHECK(still_small.max_work_group_size == 32);
+  CHECK(!still_small.fp64);
+
+  CHECK(apply_profile(big, "").profile.empty());
+  CHECK_THROWS_WITH(apply_profile(big, "hd4870"), Catch::Contains("unknown device profile 'hd4870'") &&
+                                                      Catch::Contains("hd5870"));
+}

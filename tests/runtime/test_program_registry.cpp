@@ -91,3 +91,20 @@ TEST_CASE("emitting kernels built without a registration mode fail to compile cl
     CHECK_THAT(std::string(e.what()), Catch::Contains("cs_registration_mode_is_set_by_the_scheduler"));
   }
 }
+
+TEST_CASE("under the HD 5870 profile, kernels are built without 64-bit atomics and within 32 KiB of local memory",
+          "[runtime][registry][quick]")
+{
+  Context hd(apply_profile(select_device(filter_from_environment()), "hd5870"));
+  REQUIRE(hd.device().local_memory <= 32 * 1024);
+  CHECK_THAT(hd.programs().device_options(), Catch::Contains("-DCS_HAS_INT64_ATOMICS=0"));
+  static const char local[] = "__kernel void k(__global uint* x) {\n"
+                              "  __local uint tile[9000];\n"
+                              "  tile[get_local_id(0)] = x[get_global_id(0)];\n"
+                              "  barrier(CLK_LOCAL_MEM_FENCE);\n"
+                              "  x[get_global_id(0)] = tile[8999 - get_local_id(0)];\n"
+                              "}\n";
+  hd.programs().add_sources({{"kernels/local_memory.cl", local}});
+  CHECK_THROWS_WITH(hd.programs().kernel("kernels/local_memory.cl", "k"),
+                    Catch::Contains("bytes of local memory, more than the 32768") && Catch::Contains("hd5870 profile"));
+}

@@ -6,6 +6,7 @@
 #include <cstreams/io/file_output.hpp>
 #include <cstreams/pipeline/option_checks.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -55,9 +56,11 @@ std::map<ContactKey, std::vector<std::optional<double>>> differences(const std::
 void print_row(const char* name, const std::vector<double>& values, const char* format)
 {
   std::printf("  %-44s", name);
-  for (double v : values) std::printf(format, v);
+  for (double v : values)
+    if (std::isnan(v)) std::printf(" %12s", "-");  // a device that does not time kernels
+    else std::printf(format, v);
   for (std::size_t d = 1; d < values.size(); ++d)
-    if (values[0] > 0) std::printf(" %11.3gx", values[d] / values[0]);
+    if (values[0] > 0 && !std::isnan(values[d])) std::printf(" %11.3gx", values[d] / values[0]);
     else std::printf(" %12s", "-");
   std::printf("\n");
 }

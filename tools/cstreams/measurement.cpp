@@ -6,8 +6,10 @@
 #include <cstreams/scenes/generators.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <unistd.h>
 
 namespace cstreams::cli {
@@ -119,10 +121,13 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
                     runtime::Context& context)
 {
   Measurement m;
-  m.device = context.device().name;
+  m.device = context.device().name + (context.device().profile.empty() ? "" : " as " + context.device().profile);
   m.platform = context.device().platform_name;
   Detector detector(context, describe(scene, first), detector_options(o));
   const bool terminal = ::isatty(STDERR_FILENO);
+  // A device without a kernel timer reports times as unknown (NaN; null in JSON).
+  const bool timed = context.device().profiling_timer;
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t frame = first; frame < last; ++frame) {
     const Step step = load_step(scene, frame);
     std::vector<double> host, device;
@@ -139,8 +144,8 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
       // With repeats, the first run of a step is a warm-up.
       if (o.repeat == 1 || r > 0) {
         host.push_back(stats.host_ms);
-        device.push_back(stats.device_ns() * 1e-6);
-        for (const auto& p : stats.run.passes) m.pass_ms[p.name].push_back(p.device_ns * 1e-6);
+        device.push_back(timed ? stats.device_ns() * 1e-6 : unknown);
+        for (const auto& p : stats.run.passes) m.pass_ms[p.name].push_back(timed ? p.device_ns * 1e-6 : unknown);
       }
     }
     if (m.pass_order.empty())

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <unistd.h>
@@ -38,8 +39,12 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
                 report.first_contact_frame - first + 1, report.first_contact_frame, report.first_contact_frame + 1);
   else
     std::printf("earliest  none: nothing collides\n");
-  std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
-              median(report.device_ms));
+  if (std::isnan(median(report.device_ms)))
+    std::printf("time      %.3f ms per step (median wall time); the device does not time kernels\n",
+                median(report.host_ms));
+  else
+    std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
+                median(report.device_ms));
   std::printf("memory    %.1f MiB on the device at most\n", double(report.peak_bytes) / (1 << 20));
 }
 

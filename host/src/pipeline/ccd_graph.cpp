@@ -3,6 +3,7 @@
 #include <cstreams/geometry/float_bounds.hpp>
 
 #include <algorithm>
+#include <limits>
 
 namespace cstreams {
 
@@ -160,13 +161,24 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
 
 std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target)
 {
+  return expand_front(layout, layout.seeds, target, std::numeric_limits<std::size_t>::max());
+}
+
+std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePair> front, std::size_t target,
+                                   std::size_t most)
+{
   // The same choices as cs_front_update, without the bounds tests.
-  std::vector<NodePair> front = layout.seeds;
   const auto& nodes = layout.nodes;
   while (front.size() < target) {
     std::vector<NodePair> next;
     bool expanded = false;
-    for (const auto& [i, j] : front) {
+    for (std::size_t k = 0; k < front.size(); ++k) {
+      // A pair's children add at most two pairs; past `most`, the rest stay as they are.
+      if (next.size() + (front.size() - k) + 2 > most) {
+        next.insert(next.end(), front.begin() + std::ptrdiff_t(k), front.end());
+        break;
+      }
+      const auto [i, j] = front[k];
       const auto &a = nodes[std::size_t(i)], &b = nodes[std::size_t(j)];
       if (i == j) {
         if (a[0] < 0) continue;  // a leaf against itself pairs nothing
@@ -361,7 +373,7 @@ struct GraphBuilder {
 
   // The front update (or search from fixed seeds) down to triangle pairs, their
   // decomposition into feature pairs, and the culls of the orphan pairs.
-  void broad_phase(std::size_t front_size)
+  void broad_phase(std::size_t front_size, bool bounded_loops)
   {
     using namespace runtime;
     const std::size_t nf = t.faces.size();
@@ -379,12 +391,15 @@ struct GraphBuilder {
       s.front = g.fixed("bvtt seeds", 8, front_size);
     }
     s.level_cap = g.param("front level cap", 4);
+    s.searches_cut = g.fixed("searches cut", 4, 2);
     s.triangle_pairs = g.variable("triangle pairs", 8, guess);
     s.vf = g.variable("vf candidates", 8, guess);
     s.ee = g.variable("ee candidates", 8, guess);
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
                        .launch_over(s.front)
-                       .read(s.node_boxes);
+                       .read(s.node_boxes)
+                       .write(s.searches_cut);
+    if (bounded_loops) update.stop_if(s.searches_cut);
     if (keep_front) update.emit(s.next_front);
     update.emit(s.triangle_pairs)
         .expect_items(4)
@@ -393,7 +408,8 @@ struct GraphBuilder {
         .arg(buffer_of(s.nodes))
         .arg(buffer_of(s.node_boxes))
         .arg(buffer_of(s.faces))
-        .arg(param_of(s.level_cap));
+        .arg(param_of(s.level_cap))
+        .arg(buffer_of(s.searches_cut));
     g.pass("decompose", {program, "cs_decompose", front_option})
         .launch_over(s.triangle_pairs)
         .emit(s.vf)
@@ -470,14 +486,14 @@ struct GraphBuilder {
 }  // namespace
 
 CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
-                         std::size_t refine_items)
+                         std::size_t refine_items, bool bounded_loops)
 {
   if (options.solver.min_separation < 0) throw InputError("the minimum separation must not be negative");
   GraphBuilder b(layout, options);
   b.geometry_streams();
   b.bounds_and_refit();
   if (!layout.seeds.empty()) {
-    b.broad_phase(front_size);
+    b.broad_phase(front_size, bounded_loops);
     b.elementary_tests(refine_items);
     b.earliest_toi();
   }

@@ -89,12 +89,12 @@ bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 struct Detector::State {
   State(runtime::Context& device, SceneDescription s, const DetectorOptions& o)
       : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
-        front(o, layout, 4 * device.device().compute_units * device.work_group_size()),
+        front(o, layout, 4 * device.device().compute_units * device.work_group_size(), device.loop_trip_limit() != 0),
         ids(layout, scene, o.solver.precision)
   {
     const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
-    CcdGraph g = build_ccd_graph(layout, options, seeds.size(),
-                                 8 * device.device().compute_units * device.work_group_size());
+    const std::size_t refine_items = 8 * device.device().compute_units * device.work_group_size();
+    CcdGraph g = build_ccd_graph(layout, options, seeds.size(), refine_items, device.loop_trip_limit() != 0);
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});

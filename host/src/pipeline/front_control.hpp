@@ -3,6 +3,10 @@
 // deferred mode keeps the front within its memory budget by lowering the level cap
 // and running the step again when the front would outgrow it, and raises the cap
 // again once the front has shrunk well below the budget.
+//
+// On a device that ends loops early, a search from one front pair may run out of loop
+// trips (cs_front_update); the step then runs again from a finer front, four times the
+// pairs of the one it searched from, until no search does.
 #include <cstreams/detector.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/runtime/scheduler.hpp>
@@ -15,24 +19,31 @@ namespace cstreams {
 
 class FrontControl {
 public:
-  FrontControl(const DetectorOptions& options, const SceneLayout& layout, std::size_t work_items);
+  FrontControl(const DetectorOptions& options, const SceneLayout& layout, std::size_t work_items,
+               bool bounded_loops);
 
   // The pairs the first front should hold: enough work for the device, within budget.
   std::size_t initial_target() const { return target_; }
   // Gives a new scheduler the first front, its limits and the level cap.
   void install(runtime::Scheduler& scheduler, const CcdStreams& streams, const std::vector<NodePair>& seeds) const;
-  // Runs the graph; returns how many runs were repeated at a coarser front.
+  // Runs the graph; returns how many runs were repeated at a coarser or finer front.
   unsigned run(runtime::Scheduler& scheduler, const CcdStreams& streams);
   std::uint32_t level_cap() const { return level_cap_; }
 
 private:
   static constexpr std::uint32_t unbounded = 0xffffffffu;
+  // Installs a front four times finer than the one the last run searched from, under
+  // a level cap that does not fold it back; throws where it cannot get finer.
+  void refine_front(runtime::Scheduler& scheduler, const CcdStreams& streams);
+
   FrontMode mode_;
   double budget_mb_;
   std::uint32_t level_cap_ = unbounded;
   std::uint32_t deepest_level_ = 0;
   std::size_t front_limit_ = 0;
   std::size_t target_;
+  const SceneLayout* layout_;
+  bool bounded_loops_;
 };
 
 }  // namespace cstreams

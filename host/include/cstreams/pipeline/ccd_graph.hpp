@@ -51,10 +51,14 @@ struct SceneLayout {
 // tree is built over the object's starting positions.
 SceneLayout make_layout(const SceneDescription& scene, double separation);
 
-// The seeds expanded breadth first, without bounds tests, until there are at least
-// `target` pairs or only leaf pairs are left: a cut of the BVTT to start from, with
-// work for every compute unit.
+// The seeds expanded breadth first, level by level, without bounds tests, until there
+// are at least `target` pairs or only leaf pairs are left: a cut of the BVTT to start
+// from, with work for every compute unit.
 std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target);
+// The same from a given front (a cut of the BVTT), which stays a cut, and never past
+// `most` pairs: the last level is then expanded only in part.
+std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePair> front, std::size_t target,
+                                   std::size_t most);
 
 // The streams of the CCD graph; those a scene does not need stay unset.
 struct CcdStreams {
@@ -62,6 +66,7 @@ struct CcdStreams {
   runtime::StreamId faces, edges, nodes, face_edges, owned, vertex_object;
   runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes;
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
+  runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
   runtime::StreamId earliest;
   runtime::ParamId level_cap;
@@ -102,8 +107,9 @@ struct CcdGraph {
 // the front update (or search from fixed seeds), the decomposition, the orphan culls
 // for self-colliding objects, the elementary tests, and the earliest time per object.
 // refine_items: the work-items of the conservative solver's refinement passes (enough
-// work-groups to fill the device).
+// work-groups to fill the device). bounded_loops: for a device that ends loops early,
+// the front update stops the run when a search ran out of loop trips (RunStopped).
 CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
-                         std::size_t refine_items = 1 << 14);
+                         std::size_t refine_items = 1 << 14, bool bounded_loops = false);
 
 }  // namespace cstreams

@@ -41,10 +41,12 @@ public:
   };
 
   // max_work_group_size (a power of two; 0: none) keeps the runtime's groups smaller
-  // than the device allows, as a smaller device would run them.
-  explicit Context(const DeviceInfo& device, std::size_t max_work_group_size = 0);
+  // than the device allows, as a smaller device would run them. loop_trip_limit (0:
+  // none) makes the kernels keep their loops within that many trips a work-item, as on
+  // a device that ends loops there (see loop_trip_limit()).
+  explicit Context(const DeviceInfo& device, std::size_t max_work_group_size = 0, std::uint32_t loop_trip_limit = 0);
   // Opens the device that `filter` selects (see select_device()).
-  explicit Context(std::string_view filter, std::size_t max_work_group_size = 0);
+  explicit Context(std::string_view filter, std::size_t max_work_group_size = 0, std::uint32_t loop_trip_limit = 0);
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
   ~Context();
@@ -57,6 +59,11 @@ public:
   // Work-group size of every kernel the runtime launches with a fixed local size: the
   // largest power of two up to 256 that the device and its kernels allow.
   std::size_t work_group_size() const noexcept { return work_group_size_; }
+
+  // The loop trips a work-item may make in all before the device ends its loops (Mesa's
+  // llvmpipe ends them after 65535), or the lower limit asked for; 0: no limit. Kernels
+  // see it as CS_LOOP_TRIPS and keep within it (cl_kernels/runtime/common.h).
+  std::uint32_t loop_trip_limit() const noexcept { return loop_trip_limit_; }
 
   // Launches a 1-D range of `global` work-items (rounded up to `local`; 0 lets the
   // driver choose local size). A launch of 0 items enqueues nothing.
@@ -85,6 +92,7 @@ private:
   Handle<cl_context> context_;
   Handle<cl_command_queue> queue_;
   std::size_t work_group_size_ = 0;
+  std::uint32_t loop_trip_limit_ = 0;
   std::size_t memory_limit_ = 0;
   std::shared_ptr<std::atomic<std::size_t>> memory_in_use_;
   std::atomic<std::thread::id> user_{};

@@ -32,9 +32,11 @@ struct DeviceInfo {
   std::size_t max_allocation = 0;
   std::size_t max_work_group_size = 0;
   bool fp64 = false;
+  std::string fp64_extension;  // cl_khr_fp64, or cl_amd_fp64 where only that is offered
   bool int64_atomics = false;  // cl_khr_int64_base_atomics
+  std::string profile;         // the device profile it runs under (apply_profile), or empty
   bool correctly_rounded_divide_sqrt = false;
-  bool profiling_timer = true;
+  bool profiling_timer = true;  // profiling events time kernels (learnt by a Context)
 
   bool is_pocl() const;
   bool is_nvidia() const;
@@ -60,8 +62,20 @@ bool matches(const DeviceInfo& device, std::string_view filter);
 // The filter a user gave through CSTREAMS_DEVICE, or empty.
 std::string filter_from_environment();
 
+// A device profile keeps the runtime within what a smaller device offers, on any device
+// that offers at least as much: "hd5870" (AMD Radeon HD 5870 class) lowers global memory
+// to 1 GiB, an allocation to 256 MiB, local memory to 32 KiB and work-groups to 256
+// work-items, and takes away 64-bit atomics (programs see CS_HAS_INT64_ATOMICS=0);
+// double precision stays only where the device has it. An empty name changes nothing;
+// an unknown one throws Error naming the profiles there are.
+DeviceInfo apply_profile(DeviceInfo device, std::string_view profile);
+
+// The profile a user gave through CSTREAMS_DEVICE_PROFILE, or empty.
+std::string profile_from_environment();
+
 // The device a filter selects: the first match, preferring a GPU when the filter is
-// empty. Throws DeviceNotFound listing every device when nothing matches.
+// empty, under the profile of CSTREAMS_DEVICE_PROFILE. Throws DeviceNotFound listing
+// every device when nothing matches.
 DeviceInfo select_device(std::string_view filter);
 DeviceInfo select_device(const std::vector<DeviceInfo>& devices, std::string_view filter);
 

@@ -61,6 +61,13 @@ private:
   std::size_t needed_;
 };
 
+// A pass raised its stop flag (PassSpec::stop_if): the run stopped after it, its
+// outputs incomplete, for the caller to change the inputs and run again.
+class RunStopped : public Error {
+public:
+  explicit RunStopped(const std::string& pass);
+};
+
 // An allocation the device cannot hold: over its largest single allocation, or over
 // the memory left under the context's limit (Context::memory_limit()).
 class DeviceMemoryExhausted : public Error {

@@ -58,7 +58,8 @@ template <class T> PassArg value_of(const T& v)
 //          one first item per input (list[i]) and the input's state (state[i]);
 //   round  `round_items` work-items, each group striding over the round's items
 //          (cl_kernels/runtime/worklist.h): __global S* state, __global const I* in,
-//          __global I* out, __global uint* counts, const uint round, const uint capacity;
+//          __global I* out, __global uint* counts, const uint round, const uint capacity,
+//          ending with cs_worklist_check_loops(counts, round);
 //   then the pass's kernel over the inputs: __global S* state, then its emitters.
 // Rounds go in batches with no host round trip between them; the host reads the
 // counts once a batch. A round that overflows the list grows it and the work starts
@@ -93,6 +94,7 @@ struct PassSpec {
   std::vector<PassArg> args;
   double items_per_work_item = 2;     // expected emissions, to size first segments
   std::optional<Worklist> worklist;
+  StreamId stop_flag;                 // a fixed output: a nonzero first word stops the run
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
   PassSpec& launch_over(std::vector<StreamId> streams)
@@ -111,7 +113,11 @@ struct PassSpec {
   PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
   PassSpec& expect_items(double per_work_item) { items_per_work_item = per_work_item; return *this; }
   PassSpec& refine(Worklist w) { worklist = std::move(w); return *this; }
+  // After the pass, the scheduler reads the first word of `flag` (a fixed stream the
+  // pass writes) and throws RunStopped where it is not 0.
+  PassSpec& stop_if(StreamId flag) { stop_flag = flag; return *this; }
   bool culls() const { return cull_source.index != 0xffffffffu; }
+  bool stops() const { return stop_flag.index != 0xffffffffu; }
 };
 
 // Every stream a pass reads (declared reads, its launch stream, the culled stream and
