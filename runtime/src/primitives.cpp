@@ -1,5 +1,9 @@
 #include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/error.hpp>
 #include <cstreams/runtime/primitives.hpp>
+
+#include <algorithm>
+#include <string>
 
 namespace cstreams::runtime {
 
@@ -84,6 +88,61 @@ void Compactor::compact(const Buffer& src, std::size_t words, const Buffer& keep
   scan_.exclusive(keep, offsets_, n, counters, slot, timeline, label);
   scatter_.set_args(src, cl_uint(words), keep, offsets_, cl_uint(n), dst, cl_uint(capacity));
   context_.launch(scatter_, n, context_.work_group_size(), timeline, label);
+}
+
+Sorter::Sorter(Context& context)
+    : context_(context),
+      blocks_(context.programs().kernel("runtime/sort.cl", "cs_sort_blocks")),
+      merge_(context.programs().kernel("runtime/sort.cl", "cs_merge_runs"))
+{
+}
+
+std::size_t Sorter::block_records(std::size_t words) const
+{
+  // Half the local memory at most, so that two groups can share a compute unit, and no
+  // more than 16 KiB: longer blocks save a merge pass each but lengthen the network.
+  const std::size_t bytes = std::min<std::size_t>(context_.device().local_memory / 2, 16384);
+  std::size_t block = 1;
+  while (2 * block * words * sizeof(cl_uint) <= bytes) block *= 2;
+  return block >= 2 ? block : 0;
+}
+
+std::size_t Sorter::launches(std::size_t n, std::size_t words) const
+{
+  if (n < 2) return 0;
+  const std::size_t block = block_records(words);
+  std::size_t launches = block ? 1 : 0;
+  for (std::size_t width = std::max<std::size_t>(block, 1); width < n; width *= 2) ++launches;
+  return launches;
+}
+
+const Buffer& Sorter::sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline,
+                           const char* label)
+{
+  if (n >= (std::size_t(1) << 31))
+    throw Error(std::string(label) + ": " + std::to_string(n) + " records, the sort takes fewer than 2^31");
+  if (n < 2) return records;
+  const std::size_t wg = context_.work_group_size();
+  const std::size_t block = block_records(words);
+  if (block) {
+    blocks_.set_args(records, cl_uint(n), cl_uint(words), cl_uint(block));
+    blocks_.set_local(4, block * words * sizeof(cl_uint));
+    context_.launch(blocks_, (n + block - 1) / block * wg, wg, timeline, label);
+  }
+  if (block >= n) return records;
+  ensure_capacity(context_, scratch_, n * words * sizeof(cl_uint), "sort scratch");
+  // A work-item writes this many records of a merged run; more would leave the GPU idle
+  // in the last passes, fewer would repeat the binary searches.
+  constexpr std::size_t chunk = 8;
+  const Buffer* in = &records;
+  const Buffer* out = &scratch_;
+  for (std::size_t width = std::max<std::size_t>(block, 1); width < n; width *= 2) {
+    const std::size_t c = std::min(chunk, 2 * width);
+    merge_.set_args(*in, *out, cl_uint(n), cl_uint(words), cl_uint(width), cl_uint(c));
+    context_.launch(merge_, (n + c - 1) / c, wg, timeline, label);
+    std::swap(in, out);
+  }
+  return *in;
 }
 
 }  // namespace cstreams::runtime

@@ -1,3 +1,4 @@
+#include "contact_readback.hpp"
 #include "feature_ids.hpp"
 #include "front_control.hpp"
 #include "scene_upload.hpp"
@@ -78,7 +79,6 @@ std::size_t DetectorStats::device_bytes() const
 namespace {
 
 using Pair = std::array<std::uint32_t, 2>;
-using Found = std::array<std::uint32_t, 4>;
 
 bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 
@@ -90,7 +90,7 @@ struct Detector::State {
   State(runtime::Context& device, SceneDescription s, const DetectorOptions& o)
       : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
         front(o, layout, 4 * device.device().compute_units * device.work_group_size(), device.loop_trip_limit() != 0),
-        ids(layout, scene, o.solver.precision)
+        ids(layout), readback(device, layout, scene, o.solver.precision)
   {
     const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
     const std::size_t refine_items = 8 * device.device().compute_units * device.work_group_size();
@@ -111,6 +111,7 @@ struct Detector::State {
   SceneLayout layout;
   FrontControl front;
   FeatureIds ids;
+  ContactReadback readback;
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
   std::vector<Contact> contacts;
@@ -212,14 +213,15 @@ void Detector::run_step(Report report)
   q.copy(st.x1, 0, st.x0, 0, s.layout.moving_vertices);
   if (has(st.x1_double)) q.copy(st.x1_double, 0, st.x0_double, 0, s.layout.moving_vertices);
 
-  if (report == Report::contacts) {
-    for (const auto& [stream, kind] : st.contacts)
-      for (const Found& c : q.download<Found>(stream)) s.contacts.push_back(s.ids.contact(kind, c));
-    sort_canonical(s.contacts);
-    s.have_contacts = true;
-  }
   DetectorStats& stats = s.stats;
   stats.run = q.stats();
+  if (report == Report::contacts) {
+    runtime::PassStats readback;
+    s.readback.read(q, st, s.options.profile, readback, s.contacts);
+    s.have_contacts = true;
+    stats.run.passes.push_back(readback);
+  }
+  stats.run.scratch_bytes += s.readback.scratch_bytes();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();
   stats.triangle_pairs = s.count(st.triangle_pairs);

@@ -59,4 +59,32 @@ private:
   Buffer offsets_;
 };
 
+// Sorts records of `words` 32-bit words, compared word by word as unsigned integers
+// (the first word most significant), on the device: blocks of a few hundred records in
+// local memory, then merge passes that each double the sorted runs, each linear in n.
+// Scratch for the passes is kept and only ever grows.
+class Sorter {
+public:
+  explicit Sorter(Context& context);
+
+  // Sorts the first n records of `records` and returns the buffer that then holds them
+  // in order: `records` itself or the sorter's scratch (valid until the next sort).
+  // n must stay below 2^31.
+  const Buffer& sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline = nullptr,
+                     const char* label = "sort");
+  std::size_t scratch_bytes() const { return scratch_.bytes(); }
+  // Launches a sort of n records takes.
+  std::size_t launches(std::size_t n, std::size_t words) const;
+
+private:
+  // Records a work-group sorts in local memory: a power of two, or 0 where fewer than
+  // two records of `words` words fit.
+  std::size_t block_records(std::size_t words) const;
+
+  Context& context_;
+  Kernel blocks_;
+  Kernel merge_;
+  Buffer scratch_;
+};
+
 }  // namespace cstreams::runtime

@@ -1,0 +1,80 @@
+#include "contact_readback.hpp"
+
+#include <cstreams/runtime/context.hpp>
+
+#include <cstring>
+#include <string>
+
+namespace cstreams {
+
+namespace {
+
+constexpr std::size_t record_words = 8;  // cs_contact_records
+
+Contact from_record(const cl_uint* r, bool double_time)
+{
+  Contact c;
+  c.kind = r[0] >> 31 ? ContactKind::edge_edge : ContactKind::vertex_face;
+  c.object_a = r[0] & 0x7fffffffu;
+  c.object_b = r[1];
+  c.v = {r[2], r[3], r[4], r[5]};
+  if (double_time) {
+    const std::uint64_t bits = std::uint64_t(r[6]) << 32 | r[7];
+    std::memcpy(&c.toi, &bits, sizeof bits);
+  } else {
+    float toi;
+    std::memcpy(&toi, &r[6], sizeof toi);
+    c.toi = toi;
+  }
+  return c;
+}
+
+}  // namespace
+
+ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& layout, const SceneDescription& scene,
+                                 Precision precision)
+    : context_(context),
+      double_time_(precision == Precision::double_),
+      make_records_(context.programs().kernel("ccd/contacts.cl", "cs_contact_records")),
+      sorter_(context)
+{
+  std::vector<cl_uint> first_vertex(scene.objects.size());
+  for (std::size_t o = 0; o < first_vertex.size(); ++o) first_vertex[o] = layout.slots[layout.slot_of[o]].first_vertex;
+  first_vertex_ = runtime::Buffer(context, first_vertex.size() * sizeof(cl_uint), "first vertex of each object");
+  context.write(first_vertex_, first_vertex.data(), first_vertex.size() * sizeof(cl_uint));
+}
+
+void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
+                           runtime::PassStats& stats, std::vector<Contact>& contacts)
+{
+  stats = runtime::PassStats{};
+  stats.name = "canonical contacts";
+  contacts.clear();
+  std::size_t n = 0;
+  for (const auto& found : streams.contacts) n += scheduler.count(found.first);
+  if (n == 0) return;
+  runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
+  runtime::Timeline timeline;
+  runtime::Timeline* events = profile ? &timeline : nullptr;
+  std::size_t first = 0;
+  for (const auto& [stream, kind] : streams.contacts) {
+    const std::size_t count = scheduler.count(stream);
+    make_records_.set_args(scheduler.buffer(stream), cl_uint(count), cl_uint(kind == ContactKind::vertex_face),
+                           cl_uint(double_time_), scheduler.buffer(streams.faces), scheduler.buffer(streams.edges),
+                           scheduler.buffer(streams.vertex_object), first_vertex_, records_, cl_uint(first));
+    context_.launch(make_records_, count, context_.work_group_size(), events, stats.name);
+    stats.launches += count > 0;
+    first += count;
+  }
+  const runtime::Buffer& sorted = sorter_.sort(records_, n, record_words, events, stats.name.c_str());
+  stats.launches += unsigned(sorter_.launches(n, record_words));
+  words_.resize(n * record_words);
+  context_.read(sorted, words_.data(), words_.size() * sizeof(cl_uint));
+  for (const auto& e : timeline.resolve()) stats.device_ns += e.nanoseconds;
+  stats.scratch_bytes = scratch_bytes();
+
+  contacts.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) contacts.push_back(from_record(&words_[i * record_words], double_time_));
+}
+
+}  // namespace cstreams
