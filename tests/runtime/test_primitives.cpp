@@ -1,5 +1,6 @@
 #include "../support/test_device.hpp"
 
+#include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/primitives.hpp>
 
 #include <catch2/catch.hpp>
@@ -135,4 +136,26 @@ TEST_CASE("compaction at millions of items", "[runtime][compaction][slow]")
 {
   check_compaction(std::size_t(1) << 22, 100);
   check_compaction(3'000'017, 100);
+}
+
+TEST_CASE("device reads land whole in host staging memory, which grows and moves", "[runtime][staging][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  HostStaging staging;
+  for (std::size_t n : {1, 1000, 300000, 10}) {
+    const auto values = random_values(n, std::uint32_t(n), 0xffffffffu);
+    Buffer b(ctx, n * 4, "values");
+    ctx.write(b, values.data(), n * 4);
+    const void* before = staging.data();
+    ensure_capacity(ctx, staging, n * 4, "test staging");
+    INFO("n = " << n);
+    CHECK(staging.bytes() >= n * 4);
+    if (n == 10) CHECK(staging.data() == before);  // smaller reads reuse it
+    ctx.read(b, staging.data(), n * 4);
+    const auto* got = static_cast<const cl_uint*>(staging.data());
+    CHECK(std::equal(values.begin(), values.end(), got));
+  }
+  HostStaging moved = std::move(staging);
+  CHECK(staging.data() == nullptr);
+  CHECK(moved.bytes() >= 300000 * 4);
 }

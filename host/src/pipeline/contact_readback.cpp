@@ -2,6 +2,9 @@
 
 #include <cstreams/runtime/context.hpp>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <cstring>
 #include <string>
 
@@ -49,9 +52,9 @@ void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams
 {
   stats = runtime::PassStats{};
   stats.name = "canonical contacts";
-  contacts.clear();
   std::size_t n = 0;
   for (const auto& found : streams.contacts) n += scheduler.count(found.first);
+  contacts.resize(n);
   if (n == 0) return;
   runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
   runtime::Timeline timeline;
@@ -68,13 +71,16 @@ void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams
   }
   const runtime::Buffer& sorted = sorter_.sort(records_, n, record_words, events, stats.name.c_str());
   stats.launches += unsigned(sorter_.launches(n, record_words));
-  words_.resize(n * record_words);
-  context_.read(sorted, words_.data(), words_.size() * sizeof(cl_uint));
+  const std::size_t bytes = n * record_words * sizeof(cl_uint);
+  runtime::ensure_capacity(context_, staging_, bytes, "contact records");
+  context_.read(sorted, staging_.data(), bytes);
   for (const auto& e : timeline.resolve()) stats.device_ns += e.nanoseconds;
   stats.scratch_bytes = scratch_bytes();
 
-  contacts.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) contacts.push_back(from_record(&words_[i * record_words], double_time_));
+  const auto* words = static_cast<const cl_uint*>(staging_.data());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) contacts[i] = from_record(words + i * record_words, double_time_);
+  });
 }
 
 }  // namespace cstreams

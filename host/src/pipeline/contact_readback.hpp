@@ -7,6 +7,7 @@
 #include <cstreams/detector.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/runtime/buffer.hpp>
+#include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/kernel.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
@@ -21,9 +22,10 @@ public:
                   Precision precision);
 
   // Replaces `contacts` with those of the scheduler's last run, in canonical order.
-  // `stats` receives the device time (with `profile`) and the launches it took. The
-  // host memory of one step is reused by the next: first touches of fresh pages had cost
-  // more than the transfer on cloth-ball.
+  // `stats` receives the device time (with `profile`) and the launches it took. Host
+  // memory is kept from step to step (`contacts` only shrinks or grows by the change
+  // in count), and the records are turned into contacts on every core: on one core
+  // that had cost more than the transfer on cloth-ball.
   void read(const runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats,
             std::vector<Contact>& contacts);
   std::size_t scratch_bytes() const { return records_.bytes() + sorter_.scratch_bytes(); }
@@ -35,7 +37,7 @@ private:
   runtime::Sorter sorter_;
   runtime::Buffer first_vertex_;  // per object
   runtime::Buffer records_;
-  std::vector<cl_uint> words_;  // the sorted records as read
+  runtime::HostStaging staging_;  // the sorted records as read
 };
 
 }  // namespace cstreams

@@ -196,7 +196,6 @@ void Detector::detect(Report report)
 {
   State& s = *state_;
   s.check_usable();
-  s.contacts.clear();
   s.have_contacts = false;
   s.guarded([&] { run_step(report); });
 }
