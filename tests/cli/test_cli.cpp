@@ -48,6 +48,17 @@ std::string funnel_frame(const char* name)
   return cstreams::test::benchmark_path(std::string("scalable-ccd-sample/cloth-funnel/frames/") + name);
 }
 
+// Parses and runs a command line as the program would.
+void execute(std::vector<std::string> args)
+{
+  auto cli = cstreams::cli::make_command_line();
+  args.insert(args.begin(), "cstreams");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  cli->app.parse(int(argv.size()), argv.data());
+  cli->command();
+}
+
 }  // namespace
 
 TEST_CASE("numeric flags out of range are refused before any work, naming the flag and the range", "[cli][quick]")
@@ -137,14 +148,6 @@ TEST_CASE("compare runs one scene on several devices and finds their contacts id
   const fs::path dir = fs::temp_directory_path() / "cstreams-cli-compare";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const auto execute = [](std::vector<std::string> args) {
-    auto cli = cstreams::cli::make_command_line();
-    args.insert(args.begin(), "cstreams");
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    cli->app.parse(int(argv.size()), argv.data());
-    cli->command();
-  };
   // The device the tests run on, named twice: the same filter a user would give.
   const std::string device = cstreams::filter_from_environment();
   const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
@@ -163,6 +166,34 @@ TEST_CASE("compare runs one scene on several devices and finds their contacts id
     if (timed) CHECK(d["median_device_ms"].get<double>() > 0);
     else CHECK(d["median_device_ms"].is_null());
   }
+}
+
+TEST_CASE("accuracy on several devices reports false negatives and positives per device", "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-accuracy";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string device = cstreams::filter_from_environment();
+  const std::string queries = cstreams::test::benchmark_path("sample-queries/unit-tests");
+  execute({"accuracy", "--queries", queries, "--devices", device, device, "--precision", "single", "--repeat", "1",
+           "--json", (dir / "accuracy.json").string()});
+  const auto out = nlohmann::json::parse(std::ifstream(dir / "accuracy.json"));
+  REQUIRE(out["devices"].size() == 2);
+  const auto& results = out["results"];
+  // Two solvers, two kinds, on each device.
+  REQUIRE(results.size() == 8);
+  const std::size_t half = results.size() / 2;
+  for (std::size_t i = 0; i < half; ++i) {
+    const auto &a = results[i], &b = results[half + i];
+    CHECK(a["device"] == out["devices"][0]["device"]);
+    CHECK(b["device"] == out["devices"][1]["device"]);
+    CHECK(a["solver"] == b["solver"]);
+    CHECK(a["kind"] == b["kind"]);
+    CHECK(a["false_negatives"] == b["false_negatives"]);
+    CHECK(a["false_positives"] == b["false_positives"]);
+    if (a["solver"] == "conservative") CHECK(a["false_negatives"] == 0);
+  }
+  CHECK_THAT(parse({"accuracy", "--device", device, "--devices", device, device}), Catch::Contains("excludes"));
 }
 
 TEST_CASE("the command-line fuzz corpus parses or is refused", "[cli][fuzz][quick]")

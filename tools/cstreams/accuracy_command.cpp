@@ -15,7 +15,11 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <memory>
+#include <optional>
+#include <tuple>
 
 extern const char* const cstreams_plot_accuracy_script;
 
@@ -33,19 +37,22 @@ struct AccuracyOptions {
   bool no_filter = false;
   int repeat = 5;
   std::string device;
+  std::vector<std::string> devices;
   std::string json;
   std::string plot;
 };
 
 struct Row {
-  std::string dataset, kind, solver, precision;
+  std::string device, dataset, kind, solver, precision;
   double tolerance = 0;
   std::size_t queries = 0, positives = 0, false_negatives = 0, false_positives = 0, filtered = 0, limits = 0;
   std::size_t toi_known = 0, toi_late = 0;
   double toi_error_max = 0, toi_error_median = 0, ns_per_query = 0;
+  std::vector<bool> answers;  // per query: collides
 };
 
-Row measure(DeviceSolver& solver, const Dataset& d, int repeat)
+// A device whose profiling events do not time kernels (rusticl) gets NaN for its time.
+Row measure(DeviceSolver& solver, const runtime::DeviceInfo& device, const Dataset& d, int repeat)
 {
   std::vector<std::uint64_t> times;
   std::vector<ElementaryResult> results;
@@ -56,6 +63,7 @@ Row measure(DeviceSolver& solver, const Dataset& d, int repeat)
   }
   std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
   Row row;
+  row.device = device.name;
   row.dataset = d.name;
   row.kind = d.kind == ContactKind::vertex_face ? "vf" : "ee";
   row.solver = to_string(solver.options().solver);
@@ -64,11 +72,13 @@ Row measure(DeviceSolver& solver, const Dataset& d, int repeat)
   row.queries = d.queries.size();
   row.positives = d.positives();
   row.ns_per_query = d.queries.empty() ? 0 : double(times[times.size() / 2]) / double(d.queries.size());
+  if (!device.profiling_timer) row.ns_per_query = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> errors;
   for (std::size_t i = 0; i < results.size(); ++i) {
     const auto& r = results[i];
     row.filtered += r.status == QueryStatus::filtered;
     row.limits += r.status == QueryStatus::limit;
+    row.answers.push_back(r.collides());
     if (d.collides[i] && !r.collides()) ++row.false_negatives;
     if (!d.collides[i] && r.collides()) ++row.false_positives;
     if (d.collides[i] && r.collides() && !std::isnan(d.exact_toi[i])) {
@@ -90,7 +100,9 @@ nlohmann::json to_json(const Row& r)
 {
   nlohmann::json toi_max = r.toi_known ? nlohmann::json(r.toi_error_max) : nlohmann::json();
   nlohmann::json toi_median = r.toi_known ? nlohmann::json(r.toi_error_median) : nlohmann::json();
-  return {{"dataset", r.dataset},
+  const bool timed = !std::isnan(r.ns_per_query);
+  return {{"device", r.device},
+          {"dataset", r.dataset},
           {"kind", r.kind},
           {"solver", r.solver},
           {"precision", r.precision},
@@ -105,17 +117,19 @@ nlohmann::json to_json(const Row& r)
           {"toi_error_max", toi_max},
           {"toi_error_median", toi_median},
           {"toi_later_than_exact", r.toi_late},
-          {"ns_per_query", r.ns_per_query},
-          {"queries_per_second", r.ns_per_query > 0 ? 1e9 / r.ns_per_query : 0.0}};
+          {"ns_per_query", timed ? nlohmann::json(r.ns_per_query) : nlohmann::json()},
+          {"queries_per_second", !timed ? nlohmann::json() : nlohmann::json(r.ns_per_query > 0 ? 1e9 / r.ns_per_query : 0.0)}};
 }
 
 void print_row(const Row& r)
 {
   char toi[64] = "-";
   if (r.toi_known) std::snprintf(toi, sizeof toi, "%.2e / %.2e / %zu", r.toi_error_max, r.toi_error_median, r.toi_late);
-  std::printf("| %-36s | %-2s | %-12s | %-6s | %7.0e | %7zu | %6zu | %4zu | %6zu | %7zu | %5zu | %-27s | %9.1f |\n",
+  char ns[32] = "-";
+  if (!std::isnan(r.ns_per_query)) std::snprintf(ns, sizeof ns, "%.1f", r.ns_per_query);
+  std::printf("| %-36s | %-2s | %-12s | %-6s | %7.0e | %7zu | %6zu | %4zu | %6zu | %7zu | %5zu | %-27s | %9s |\n",
               r.dataset.c_str(), r.kind.c_str(), r.solver.c_str(), r.precision.c_str(), r.tolerance, r.queries,
-              r.positives, r.false_negatives, r.false_positives, r.filtered, r.limits, toi, r.ns_per_query);
+              r.positives, r.false_negatives, r.false_positives, r.filtered, r.limits, toi, ns);
   std::fflush(stdout);
 }
 
@@ -133,40 +147,39 @@ void check(const AccuracyOptions& o)
   if (!o.plot.empty()) check_output_path("--plot", o.plot);
 }
 
-void run(const AccuracyOptions& o)
+// One device's table: every solver, precision and tolerance asked for, on every dataset.
+std::vector<Row> run_on(const std::string& filter, const AccuracyOptions& o, const std::vector<Dataset>& datasets,
+                        nlohmann::json& out)
 {
-  std::vector<std::string> roots = o.queries;
-  if (roots.empty()) roots.push_back(CSTREAMS_DEFAULT_BENCHMARK_DIR);
-  std::vector<Dataset> datasets;
-  for (const auto& root : roots) {
-    auto found = discover_datasets(root);
-    datasets.insert(datasets.end(), std::make_move_iterator(found.begin()), std::make_move_iterator(found.end()));
-  }
-  runtime::Context context(o.device.empty() ? filter_from_environment() : o.device);
-
+  runtime::Context context(filter);
+  const runtime::DeviceInfo& device = context.device();
   std::vector<Solver> solvers;
   if (o.solver == "all") solvers = {Solver::cubic, Solver::conservative};
   else solvers = {parse_solver(o.solver)};
   std::vector<Precision> precisions;
   if (o.precision == "all") {
     precisions = {Precision::single};
-    if (context.device().fp64) precisions.push_back(Precision::double_);
+    if (device.fp64) precisions.push_back(Precision::double_);
   } else {
     precisions = {parse_precision(o.precision)};
   }
 
-  std::printf("device: %s (%s)\n\n", context.device().name.c_str(), context.device().platform_name.c_str());
+  std::printf("device: %s (%s)%s\n\n", device.name.c_str(), device.platform_name.c_str(),
+              device.profiling_timer ? "" : "; it does not time kernels");
   std::printf("| %-36s | %-2s | %-12s | %-6s | %7s | %7s | %6s | %4s | %6s | %7s | %5s | %-27s | %9s |\n", "dataset",
               "k", "solver", "prec", "tol", "queries", "pos", "FN", "FP", "culled", "limit",
               "toi err max / median / late", "ns/query");
   std::printf("|%s|\n", std::string(186, '-').c_str());
-  nlohmann::json out{{"device", context.device().name}, {"platform", context.device().platform_name},
-                     {"results", nlohmann::json::array()}};
+  if (out.empty()) {
+    out = {{"device", device.name}, {"platform", device.platform_name}, {"results", nlohmann::json::array()}};
+  }
+  out["devices"].push_back({{"filter", filter}, {"device", device.name}, {"platform", device.platform_name}});
+  std::vector<Row> rows;
   for (Solver s : solvers)
     for (Precision p : precisions) {
       // What the device lacks for this pair is said once, not failed on.
-      if (o.precision == "all" && p == Precision::double_ && s == Solver::conservative && !context.device().int64_atomics) {
-        std::printf("| conservative double skipped: %s has no 64-bit atomics |\n", context.device().name.c_str());
+      if (o.precision == "all" && p == Precision::double_ && s == Solver::conservative && !device.int64_atomics) {
+        std::printf("| conservative double skipped: %s has no 64-bit atomics |\n", device.name.c_str());
         continue;
       }
       std::vector<double> tolerances = o.tolerances;
@@ -181,12 +194,86 @@ void run(const AccuracyOptions& o)
         options.filter = !o.no_filter;
         DeviceSolver solver(context, options);
         for (const auto& d : datasets) {
-          const Row row = measure(solver, d, o.repeat);
-          print_row(row);
-          out["results"].push_back(to_json(row));
+          rows.push_back(measure(solver, device, d, o.repeat));
+          print_row(rows.back());
+          out["results"].push_back(to_json(rows.back()));
         }
       }
     }
+  std::printf("\n");
+  return rows;
+}
+
+// Several devices side by side: false negatives and false positives per solver,
+// precision, tolerance and kind, summed over the datasets, and how many queries each
+// device answers otherwise than the first.
+void print_devices_side_by_side(const std::vector<std::vector<Row>>& per_device)
+{
+  using Key = std::tuple<std::string, std::string, double, std::string>;
+  struct Cell {
+    std::size_t false_negatives = 0, false_positives = 0, differing = 0;
+    bool compared = true;  // device 1 ran every dataset of this cell too
+  };
+  std::map<Key, std::vector<std::optional<Cell>>> table;
+  std::map<std::tuple<Key, std::string>, const std::vector<bool>*> first_answers;
+  for (std::size_t d = 0; d < per_device.size(); ++d)
+    for (const Row& r : per_device[d]) {
+      const Key key{r.solver, r.precision, r.tolerance, r.kind};
+      auto& cells = table[key];
+      cells.resize(per_device.size());
+      if (!cells[d]) cells[d] = Cell{};
+      cells[d]->false_negatives += r.false_negatives;
+      cells[d]->false_positives += r.false_positives;
+      const std::tuple<Key, std::string> query_set{key, r.dataset};
+      if (d == 0) {
+        first_answers[query_set] = &r.answers;
+        cells[d]->compared = false;
+        continue;
+      }
+      const auto first = first_answers.find(query_set);
+      if (first == first_answers.end()) {
+        cells[d]->compared = false;
+        continue;
+      }
+      for (std::size_t i = 0; i < r.answers.size(); ++i) cells[d]->differing += r.answers[i] != (*first->second)[i];
+    }
+  std::printf("per device: false negatives / false positives / queries answered otherwise than device 1\n");
+  for (std::size_t d = 0; d < per_device.size(); ++d)
+    if (!per_device[d].empty()) std::printf("  device %zu: %s\n", d + 1, per_device[d].front().device.c_str());
+  std::printf("\n");
+  std::printf("| %-12s | %-6s | %7s | %-2s |", "solver", "prec", "tol", "k");
+  for (std::size_t d = 0; d < per_device.size(); ++d) std::printf(" device %-16zu |", d + 1);
+  std::printf("\n");
+  for (const auto& [key, cells] : table) {
+    const auto& [solver, precision, tolerance, kind] = key;
+    std::printf("| %-12s | %-6s | %7.0e | %-2s |", solver.c_str(), precision.c_str(), tolerance, kind.c_str());
+    for (const auto& c : cells) {
+      char text[32] = "-";
+      if (c && c->compared)
+        std::snprintf(text, sizeof text, "%zu / %zu / %zu", c->false_negatives, c->false_positives, c->differing);
+      else if (c)
+        std::snprintf(text, sizeof text, "%zu / %zu / -", c->false_negatives, c->false_positives);
+      std::printf(" %-23s |", text);
+    }
+    std::printf("\n");
+  }
+}
+
+void run(const AccuracyOptions& o)
+{
+  std::vector<std::string> roots = o.queries;
+  if (roots.empty()) roots.push_back(CSTREAMS_DEFAULT_BENCHMARK_DIR);
+  std::vector<Dataset> datasets;
+  for (const auto& root : roots) {
+    auto found = discover_datasets(root);
+    datasets.insert(datasets.end(), std::make_move_iterator(found.begin()), std::make_move_iterator(found.end()));
+  }
+  std::vector<std::string> filters = o.devices;
+  if (filters.empty()) filters.push_back(o.device.empty() ? filter_from_environment() : o.device);
+  nlohmann::json out;
+  std::vector<std::vector<Row>> per_device;
+  for (const auto& filter : filters) per_device.push_back(run_on(filter, o, datasets, out));
+  if (per_device.size() > 1) print_devices_side_by_side(per_device);
   if (!o.json.empty()) write_file(o.json, out.dump(2) + "\n");
   if (!o.plot.empty()) draw_plot(cstreams_plot_accuracy_script, out, o.plot);
 }
@@ -209,7 +296,11 @@ void add_accuracy_command(CLI::App& app, Command& command)
   cmd->add_option("--max-iterations", o->max_iterations, "Conservative solver's work limit per query");
   cmd->add_flag("--no-filter", o->no_filter, "Do not run the non-penetration filter first");
   cmd->add_option("--repeat", o->repeat, "Timed repeats after one warm-up (median reported)")->check(CLI::PositiveNumber);
-  cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
+  auto* device = cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
+  cmd->add_option("--devices", o->devices,
+                  "Device filters, one per device: each device's table, then false negatives and positives side "
+                  "by side")
+      ->excludes(device);
   cmd->add_option("--json", o->json, "Write the results as JSON");
   cmd->add_option("--plot", o->plot, "Draw speed against error as a PNG (python3-matplotlib)");
   cmd->callback([o, &command] {
