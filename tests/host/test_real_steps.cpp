@@ -2,6 +2,7 @@
 #include "../support/benchmark_data.hpp"
 #include "../support/test_device.hpp"
 
+#include <cstreams/datasets/datasets.hpp>
 #include <cstreams/detector.hpp>
 
 #include <cstreams/io/query_io.hpp>
@@ -223,4 +224,49 @@ TEST_CASE("the host reference misses none of the hand-made degenerate queries", 
   CHECK(queries == 7279);
   CHECK(positives == 435);
   CHECK(false_negatives == 0);
+}
+
+TEST_CASE("a real step's ground truth answers for every candidate pair as contacts name it", "[host][io][quick]")
+{
+  const RealStep& s = cstreams::test::real_steps[0];
+  const std::string dir = cstreams::test::benchmark_path(std::string("scalable-ccd-sample/") + s.scene + "/frames/");
+  const auto truth = StepTruth::for_frames({dir + s.frame0, dir + s.frame1});
+  REQUIRE(truth);
+  const Scene scene = load_real(s);
+  const Step step = load_step(scene, 0);
+  const GroundTruth g = ground_truth(s, step);
+  std::size_t positives = 0;
+  for (std::size_t i = 0; i < g.vf_pairs.size(); ++i) {
+    const auto answer = truth->of(make_contact(step, 0, 0, g.vf_pairs[i], 0));
+    REQUIRE(answer);
+    CHECK(answer->collides == g.vf_truth[i]);
+    positives += answer->collides;
+  }
+  for (std::size_t i = 0; i < g.ee_pairs.size(); ++i) {
+    const auto answer = truth->of(make_contact(step, 0, 0, g.ee_pairs[i], 0));
+    REQUIRE(answer);
+    CHECK(answer->collides == g.ee_truth[i]);
+    positives += answer->collides;
+  }
+  CHECK(positives == g.vf.size() + g.ee.size());
+  CHECK(positives > 0);
+
+  const StepTruth::Answer none{false, std::nanl("")}, contact{true, 0.25L};
+  CHECK(std::string(none.verdict(std::nullopt)) == "right");
+  CHECK(std::string(none.verdict(0.5)) == "false positive");
+  CHECK(std::string(contact.verdict(std::nullopt)) == "misses it");
+  CHECK(std::string(contact.verdict(0.25)) == "right");
+  CHECK(std::string(contact.verdict(0.2)) == "right");
+  CHECK(std::string(contact.verdict(0.3)) == "later than exact");
+  CHECK(std::string(StepTruth::Answer{true, std::nanl("")}.verdict(0.9)) == "right");
+
+  // A vertex against its own face is never a candidate; another object has no truth.
+  const Face& f = scene.objects[0].topology.faces[0];
+  CHECK_FALSE(truth->of(Contact{ContactKind::vertex_face, 0, 0, {f[0], f[0], f[1], f[2]}, 0.5}));
+  Contact elsewhere = make_contact(step, 0, 0, g.vf_pairs[0], 0);
+  elsewhere.object_b = 1;
+  CHECK_FALSE(truth->of(elsewhere));
+  // Frames that are not the two of one step folder have none.
+  CHECK_FALSE(StepTruth::for_frames({dir + s.frame0}));
+  CHECK_FALSE(StepTruth::for_frames({dir + s.frame0, cstreams::test::benchmark_path("scalable-ccd-sample/rod-twist/frames/3036.ply")}));
 }

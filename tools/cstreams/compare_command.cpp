@@ -2,6 +2,7 @@
 #include "measurement.hpp"
 #include "plotting.hpp"
 
+#include <cstreams/datasets/datasets.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/io/file_output.hpp>
 #include <cstreams/pipeline/option_checks.hpp>
@@ -65,7 +66,14 @@ void print_row(const char* name, const std::vector<double>& values, const char* 
   std::printf("\n");
 }
 
-void print_difference(const ContactKey& key, const std::vector<std::optional<double>>& times)
+Contact contact_of(const ContactKey& key)
+{
+  const auto& [frame, kind, a, b, v] = key;
+  return Contact{kind, a, b, v, 0};
+}
+
+void print_difference(const ContactKey& key, const std::vector<std::optional<double>>& times,
+                      const std::optional<StepTruth::Answer>& truth)
 {
   const auto& [frame, kind, a, b, v] = key;
   std::printf("  step %zu %s objects %u-%u (%u %u %u %u):", frame, kind == ContactKind::vertex_face ? "vf" : "ee", a, b,
@@ -73,6 +81,12 @@ void print_difference(const ContactKey& key, const std::vector<std::optional<dou
   for (const auto& t : times)
     if (t) std::printf(" %.17g", *t);
     else std::printf(" %17s", "none");
+  std::printf("\n");
+  if (!truth) return;
+  if (!truth->collides) std::printf("    truth: no contact");
+  else if (std::isnan(truth->exact_toi)) std::printf("    truth: contact");
+  else std::printf("    truth: contact at %.17Lg", truth->exact_toi);
+  for (std::size_t d = 0; d < times.size(); ++d) std::printf("; device %zu: %s", d + 1, truth->verdict(times[d]));
   std::printf("\n");
 }
 
@@ -88,6 +102,13 @@ void compare(const CompareOptions& o)
     runs.push_back(measure(o, scene, first, last, context));
   }
   const auto differing = differences(runs, first);
+  // Ground truth where the scene is the one object of a real step's two frames.
+  std::optional<StepTruth> truth;
+  if (scene.objects.size() == 1 && first == 0 && last == 1 && !differing.empty())
+    truth = StepTruth::for_frames(o.paths);
+  auto truth_of = [&](const ContactKey& key) {
+    return truth ? truth->of(contact_of(key)) : std::optional<StepTruth::Answer>{};
+  };
 
   std::printf("scene     %s: %zu objects, %zu faces; %zu steps (frames %zu to %zu)\n", scene.name.c_str(),
               scene.objects.size(), scene.face_count(), last - first, first, last);
@@ -115,15 +136,15 @@ void compare(const CompareOptions& o)
   if (differing.empty()) {
     std::printf("\ncontacts  identical on every device\n");
   } else {
-    std::printf("\ncontacts  %zu differ (time of impact per device, \"none\" where it reports none):\n",
-                differing.size());
+    std::printf("\ncontacts  %zu differ (time of impact per device, \"none\" where it reports none%s):\n",
+                differing.size(), truth ? "; the step's ground truth below each" : "");
     std::size_t shown = 0;
     for (const auto& [key, times] : differing) {
       if (++shown > 20) {
         std::printf("  ... and %zu more (all in --json)\n", differing.size() - 20);
         break;
       }
-      print_difference(key, times);
+      print_difference(key, times, truth_of(key));
     }
   }
 
@@ -151,12 +172,21 @@ void compare(const CompareOptions& o)
     const auto& [frame, kind, a, b, v] = key;
     nlohmann::json t = nlohmann::json::array();
     for (const auto& x : times) t.push_back(x ? nlohmann::json(*x) : nlohmann::json());
+    nlohmann::json truth_json, verdicts;
+    if (const auto answer = truth_of(key)) {
+      const bool exact = !std::isnan(answer->exact_toi);
+      truth_json = {{"collides", answer->collides},
+                    {"exact_toi", exact ? nlohmann::json(double(answer->exact_toi)) : nlohmann::json()}};
+      for (const auto& x : times) verdicts.push_back(answer->verdict(x));
+    }
     out["differences"].push_back({{"frame", frame},
                                   {"kind", kind == ContactKind::vertex_face ? "vf" : "ee"},
                                   {"object_a", a},
                                   {"object_b", b},
                                   {"v", v},
-                                  {"toi", t}});
+                                  {"toi", t},
+                                  {"truth", truth_json},
+                                  {"verdicts", verdicts}});
   }
   if (!o.json.empty()) write_file_atomically(o.json, [&](std::ostream& f) { f << out.dump(1) << "\n"; });
   if (!o.plot.empty()) draw_plot(cstreams_plot_compare_script, out, o.plot);

@@ -115,10 +115,12 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
       if (a >= nv || b < nv + ne || b >= nv + ne + nf)
         throw InputError(boxes_file + ": pair " + std::to_string(i) + " is not a vertex and a face");
       d.queries.push_back(vertex_face_query(s, 0, 0, {std::uint32_t(a), std::uint32_t(b - nv - ne)}));
+      d.features.push_back({std::uint32_t(a), std::uint32_t(b - nv - ne)});
     } else {
       if (a < nv || a >= nv + ne || b < nv || b >= nv + ne)
         throw InputError(boxes_file + ": pair " + std::to_string(i) + " is not two edges");
       d.queries.push_back(edge_edge_query(s, 0, 0, {std::uint32_t(a - nv), std::uint32_t(b - nv)}));
+      d.features.push_back({std::uint32_t(a - nv), std::uint32_t(b - nv)});
     }
   }
   d.collides = read_bool_array((folder / "mma_bool" / (step + kind_suffix(kind) + "_mma_bool.json")).string());
@@ -147,6 +149,57 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
     }
   }
   return d;
+}
+
+const char* StepTruth::Answer::verdict(const std::optional<double>& toi) const
+{
+  if (!collides) return toi ? "false positive" : "right";
+  if (!toi) return "misses it";
+  return !std::isnan(exact_toi) && (long double)*toi > exact_toi ? "later than exact" : "right";
+}
+
+std::optional<StepTruth> StepTruth::for_frames(const std::vector<std::string>& frame_paths)
+{
+  if (frame_paths.size() != 2) return std::nullopt;
+  const fs::path frames = fs::absolute(frame_paths[0]).parent_path();
+  if (frames.filename() != "frames" || fs::absolute(frame_paths[1]).parent_path() != frames) return std::nullopt;
+  const fs::path folder = frames.parent_path();
+  if (!fs::is_directory(folder / "boxes") || !fs::is_directory(folder / "mma_bool")) return std::nullopt;
+  StepTruth truth;
+  for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) {
+    const Dataset d = real_step_dataset(folder.string(), kind);
+    for (std::size_t i = 0; i < d.features.size(); ++i) {
+      auto [a, b] = d.features[i];
+      if (kind == ContactKind::edge_edge && b < a) std::swap(a, b);
+      truth.answers_[{kind, a, b}] = {d.collides[i], d.exact_toi[i]};
+    }
+  }
+  // Ids as real_step_dataset names them: the first object's own topology.
+  const Scene scene = scene_from_frames(frame_paths);
+  const Topology& t = scene.objects[0].topology;
+  for (std::uint32_t f = 0; f < t.faces.size(); ++f) truth.face_of_[t.faces[f]] = f;
+  for (std::uint32_t e = 0; e < t.edges.size(); ++e) truth.edge_of_[t.edges[e]] = e;
+  return truth;
+}
+
+std::optional<StepTruth::Answer> StepTruth::of(const Contact& c) const
+{
+  if (c.object_a != 0 || c.object_b != 0) return std::nullopt;
+  std::uint32_t a = 0, b = 0;
+  if (c.kind == ContactKind::vertex_face) {
+    const auto face = face_of_.find({c.v[1], c.v[2], c.v[3]});
+    if (face == face_of_.end()) return std::nullopt;
+    a = c.v[0];
+    b = face->second;
+  } else {
+    const auto first = edge_of_.find({c.v[0], c.v[1]}), second = edge_of_.find({c.v[2], c.v[3]});
+    if (first == edge_of_.end() || second == edge_of_.end()) return std::nullopt;
+    a = std::min(first->second, second->second);
+    b = std::max(first->second, second->second);
+  }
+  const auto answer = answers_.find({c.kind, a, b});
+  if (answer == answers_.end()) return std::nullopt;
+  return answer->second;
 }
 
 std::vector<Dataset> discover_datasets(const std::string& path)
