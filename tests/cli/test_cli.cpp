@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -166,6 +167,28 @@ TEST_CASE("compare runs one scene on several devices and finds their contacts id
     if (timed) CHECK(d["median_device_ms"].get<double>() > 0);
     else CHECK(d["median_device_ms"].is_null());
   }
+}
+
+TEST_CASE("run --earliest-only counts the same contacts and gives the earliest time without them", "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-earliest";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
+  execute({"run", a, b, "--json", (dir / "all.json").string()});
+  execute({"run", a, b, "--earliest-only", "--json", (dir / "earliest.json").string()});
+  const auto all = nlohmann::json::parse(std::ifstream(dir / "all.json"));
+  const auto earliest = nlohmann::json::parse(std::ifstream(dir / "earliest.json"));
+  CHECK(earliest["earliest_only"] == true);
+  CHECK(earliest["steps"][0]["contacts"] == all["steps"][0]["contacts"]);
+  CHECK_FALSE(earliest["steps"][0]["passes"].contains("canonical contacts"));
+  CHECK(all["steps"][0]["passes"].contains("canonical contacts"));
+  // The earliest time, rounded down to float on the device.
+  const double exact = all["earliest_toi"].get<double>(), rounded = earliest["earliest_toi"].get<double>();
+  CHECK(rounded <= exact);
+  CHECK(rounded >= double(std::nextafter(float(exact), 0.0f)));
+  CHECK_THAT(parse({"run", a, b, "--earliest-only", "--out", (dir / "c.csv").string()}),
+             Catch::Contains("--earliest-only"));
 }
 
 TEST_CASE("accuracy on several devices reports false negatives and positives per device", "[cli][quick]")

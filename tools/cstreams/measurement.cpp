@@ -139,7 +139,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
         if (r == 0) detector.set_positions(obj, step.x1[obj]);
         else detector.set_step(obj, step.x0[obj], step.x1[obj]);
       }
-      detector.detect();
+      detector.detect(o.earliest_only ? Report::earliest_toi : Report::contacts);
       stats = detector.stats();
       // With repeats, the first run of a step is a warm-up.
       if (o.repeat == 1 || r > 0) {
@@ -155,19 +155,26 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     m.device_ms.push_back(device_ms);
     m.steps.push_back(step_json(frame, stats, host_ms));
     m.steps.back()["device_ms"] = device_ms;
-    const auto& contacts = detector.contacts();
-    m.contacts.insert(m.contacts.end(), contacts.begin(), contacts.end());
-    m.step_ends.push_back(m.contacts.size());
+    m.contact_count += stats.contacts;
     m.peak_bytes = std::max(m.peak_bytes, stats.device_bytes());
-    if (m.first_contact_toi > 1)
-      for (const Contact& c : contacts)
-        if (c.toi < m.first_contact_toi) {
-          m.first_contact_toi = c.toi;
-          m.first_contact_frame = frame;
-        }
+    std::vector<double> earliest;
+    if (o.earliest_only) {
+      earliest = detector.earliest_toi();
+    } else {
+      const auto& contacts = detector.contacts();
+      m.contacts.insert(m.contacts.end(), contacts.begin(), contacts.end());
+      for (const Contact& c : contacts) earliest.push_back(c.toi);
+    }
+    m.step_ends.push_back(m.contacts.size());
+    // 1 is "no contact" in earliest_toi(), and the end of the step for a contact.
+    const bool any = o.earliest_only ? stats.contacts > 0 : !earliest.empty();
+    if (m.first_contact_toi > 1 && any) {
+      m.first_contact_toi = *std::min_element(earliest.begin(), earliest.end());
+      m.first_contact_frame = frame;
+    }
     if (terminal)
       std::fprintf(stderr, "\rstep %zu/%zu on %s: %zu contacts, %.3f ms   ", frame - first + 1, last - first,
-                   m.device.c_str(), contacts.size(), host_ms);
+                   m.device.c_str(), stats.contacts, host_ms);
   }
   if (terminal) std::fprintf(stderr, "\n");
   return m;

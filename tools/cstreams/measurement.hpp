@@ -29,6 +29,8 @@ struct MeasureOptions {
   double front_budget = DetectorOptions{}.front_budget_mb;
   std::string frames;
   unsigned repeat = 1;
+  // Read back only the earliest time of impact per object, not the contacts.
+  bool earliest_only = false;
 };
 
 // Registers the scene and the pipeline's options on a subcommand.
@@ -59,9 +61,11 @@ struct Measurement {
   std::vector<std::string> pass_order;
   std::vector<double> host_ms, device_ms;
   std::size_t peak_bytes = 0;
-  std::vector<Contact> contacts;      // every step's, in step order, each step canonical
+  std::vector<Contact> contacts;      // every step's, in step order, each step canonical (none if earliest_only)
+  std::size_t contact_count = 0;      // over all steps, as the device counted them
   std::vector<std::size_t> step_ends;  // where each step's contacts end in `contacts`
-  // The step with the earliest contact of the first step that has one.
+  // The step with the earliest contact of the first step that has one (with
+  // earliest_only, the time rounded down to float, as Detector::earliest_toi gives it).
   std::size_t first_contact_frame = 0;
   double first_contact_toi = 2;
 };

@@ -2,6 +2,7 @@
 #include "measurement.hpp"
 
 #include <cstreams/devices.hpp>
+#include <cstreams/errors.hpp>
 #include <cstreams/io/file_output.hpp>
 #include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/runtime/context.hpp>
@@ -33,7 +34,10 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
   std::printf("solver    %s, %s precision, tolerance %g; front %s\n", o.solver.c_str(), o.precision.c_str(), o.tolerance,
               o.front.c_str());
   std::printf("steps     %zu (frames %zu to %zu)\n", last - first, first, last);
-  std::printf("contacts  %zu\n", report.contacts.size());
+  if (o.earliest_only)
+    std::printf("contacts  %zu, counted on the device (--earliest-only reads none back)\n", report.contact_count);
+  else
+    std::printf("contacts  %zu\n", report.contacts.size());
   if (report.first_contact_toi <= 1)
     std::printf("earliest  t = %.6g in step %zu (frame %zu to %zu)\n", report.first_contact_toi,
                 report.first_contact_frame - first + 1, report.first_contact_frame, report.first_contact_frame + 1);
@@ -69,6 +73,8 @@ void check(const RunOptions& o)
 {
   check(static_cast<const MeasureOptions&>(o));
   if (!o.out.empty()) check_output_path("--out", o.out);
+  if (o.earliest_only && !o.out.empty())
+    throw InputError("--out writes the contacts, which --earliest-only does not read back; give one of them");
   if (!o.json.empty()) check_output_path("--json", o.json);
 }
 
@@ -99,6 +105,9 @@ void run(const RunOptions& o)
                      {"front_budget_mb", o.front_budget},
                      {"registration", o.registration},
                      {"repeat", o.repeat},
+                     {"earliest_only", o.earliest_only},
+                     {"earliest_toi", report.first_contact_toi <= 1 ? nlohmann::json(report.first_contact_toi)
+                                                                    : nlohmann::json()},
                      {"faces", scene.face_count()},
                      {"median_host_ms", median(report.host_ms)},
                      {"median_device_ms", median(report.device_ms)},
@@ -120,6 +129,8 @@ void add_run_command(CLI::App& app, Command& command)
   cmd->add_option("--out", o->out, "Write the contacts of every step, in order, as CSV");
   cmd->add_option("--json", o->json, "Write per-step statistics as JSON");
   cmd->add_flag("--passes,-v", o->passes, "Also print a table per step and the median device time of every pass");
+  cmd->add_flag("--earliest-only", o->earliest_only,
+                "Read back only the earliest time of impact per object (Report::earliest_toi), not the contacts");
   cmd->callback([o, &command] {
     check(*o);
     command = [o] { run(*o); };
