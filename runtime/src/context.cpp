@@ -150,6 +150,7 @@ void Context::launch(const Kernel& kernel, std::size_t global, std::size_t local
   check(clEnqueueNDRangeKernel(queue_.get(), kernel.get(), 1, nullptr, &global, local ? &local : nullptr, 0,
                                nullptr, timeline ? &event : nullptr),
         "clEnqueueNDRangeKernel", "launching " + kernel.name() + " over " + std::to_string(global) + " work-items");
+  ++kernel_launches_;
   if (timeline) timeline->record(label.empty() ? kernel.name() : std::string(label), out_event(timeline, event));
 }
 
@@ -181,6 +182,7 @@ void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::siz
   check(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
                             timeline ? &event : nullptr),
         "clEnqueueReadBuffer", "reading back " + std::to_string(bytes) + " bytes");
+  ++blocking_reads_;
   if (timeline) timeline->record("readback", out_event(timeline, event));
 }
 

@@ -87,6 +87,8 @@ struct DetectorStats {
   unsigned front_retries = 0;       // runs repeated at a coarser front to fit the budget
   std::size_t triangle_pairs = 0, vf_candidates = 0, ee_candidates = 0, contacts = 0;
   double host_ms = 0;               // wall time of the last detect(), uploads and readbacks included
+  unsigned launches = 0;            // kernel launches of the last detect(), every one
+  unsigned blocking_reads = 0;      // and its blocking reads (counters, flags, contacts)
   std::uint64_t device_ns() const;  // sum of the passes' device time
   std::size_t device_bytes() const; // streams and scratch
 };

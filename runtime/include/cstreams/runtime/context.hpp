@@ -80,6 +80,11 @@ public:
                 Timeline* timeline = nullptr);
   void finish();
 
+  // Every kernel launch and every blocking read this context has issued: a step's cost
+  // beyond its kernels' time is mostly these (a launch ~5 us, a read ~16 us on the H200).
+  std::uint64_t kernel_launches() const noexcept { return kernel_launches_; }
+  std::uint64_t blocking_reads() const noexcept { return blocking_reads_; }
+
   // Device memory: what this context's live buffers hold, and the most they may (the
   // device's global memory unless lowered). Buffer refuses allocations past the limit.
   std::size_t memory_in_use() const noexcept { return *memory_in_use_; }
@@ -94,6 +99,7 @@ private:
   std::size_t work_group_size_ = 0;
   std::uint32_t loop_trip_limit_ = 0;
   std::size_t memory_limit_ = 0;
+  std::uint64_t kernel_launches_ = 0, blocking_reads_ = 0;
   std::shared_ptr<std::atomic<std::size_t>> memory_in_use_;
   std::atomic<std::thread::id> user_{};
   std::unique_ptr<ProgramRegistry> programs_;
