@@ -17,7 +17,8 @@ public:
   };
 
   void record(std::string label, Handle<cl_event> event);
-  // Waits for the recorded events and returns their durations in record order.
+  // Waits for the recorded events (of one in-order queue) and returns their durations
+  // in record order.
   std::vector<Entry> resolve() const;
   void clear() { pending_.clear(); }
   bool empty() const { return pending_.empty(); }
