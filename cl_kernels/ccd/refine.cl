@@ -28,12 +28,14 @@
 #define CS_MOST_ROUNDS 1024u
 #define CS_MOST_BOXES 4096u
 
-#if CS_REAL_DOUBLE
-#if !CS_HAS_INT64_ATOMICS
-#error "the conservative solver in double precision needs cl_khr_int64_base_atomics"
-#endif
+/* Each query's earliest contact so far is a key updated by atomic minimum. Times are
+ * never negative, so their bits order as they do. In double precision the key is the
+ * double where the device has 64-bit atomics; elsewhere (an HD 5870) it is the time
+ * rounded down to float. Pruning with that rounded-down time only drops boxes that
+ * start after it, so the answer is still no later than any contact: it is the earliest
+ * contact the 64-bit key would give, rounded down to float. */
+#if CS_REAL_DOUBLE && CS_HAS_INT64_ATOMICS
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-/* Times are never negative, so their bits order as they do. */
 typedef ulong cs_key;
 inline cs_key cs_key_of(const real t) { return as_ulong(t); }
 inline real cs_time_of(const cs_key k) { return as_double(k); }
@@ -48,8 +50,17 @@ inline void cs_key_min(volatile __global cs_key* p, const cs_key k)
 }
 #else
 typedef uint cs_key;
+#if CS_REAL_DOUBLE
+inline cs_key cs_key_of(const real t)
+{
+  float f = (float)t;
+  if ((real)f > t) f = nextafter(f, 0.0f);
+  return as_uint(f);
+}
+#else
 inline cs_key cs_key_of(const real t) { return as_uint(t); }
-inline real cs_time_of(const cs_key k) { return as_float(k); }
+#endif
+inline real cs_time_of(const cs_key k) { return (real)as_float(k); }
 inline void cs_key_min(volatile __global cs_key* p, const cs_key k)
 {
   if (k < *p) atomic_min(p, k);
@@ -62,7 +73,7 @@ typedef struct {
   cs_box box;
 } cs_item;
 
-/* 2 reals + 16 bytes (host: refine_state_bytes). */
+/* 2 keys + 16 bytes, at most 2 reals + 16 (host: refine_state_bytes). */
 typedef struct {
   cs_key best[2];
   uint work[3];

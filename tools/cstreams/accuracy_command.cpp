@@ -177,11 +177,6 @@ std::vector<Row> run_on(const std::string& filter, const AccuracyOptions& o, con
   std::vector<Row> rows;
   for (Solver s : solvers)
     for (Precision p : precisions) {
-      // What the device lacks for this pair is said once, not failed on.
-      if (o.precision == "all" && p == Precision::double_ && s == Solver::conservative && !device.int64_atomics) {
-        std::printf("| conservative double skipped: %s has no 64-bit atomics |\n", device.name.c_str());
-        continue;
-      }
       std::vector<double> tolerances = o.tolerances;
       if (tolerances.empty()) tolerances = {SolverOptions{}.tolerance};
       for (double tolerance : tolerances) {

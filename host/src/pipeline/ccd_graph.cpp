@@ -277,8 +277,8 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
   contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
   // One box a work-item, breadth first across the device (refine.cl): an item is a
-  // query index, its work and a box of six reals; the state of a query two keys of
-  // one real and four words.
+  // query index, its work and a box of six reals; the state of a query two keys of at
+  // most one real each (a float on devices without 64-bit atomics) and four words.
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
   auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", options})
                    .launch_over(open)

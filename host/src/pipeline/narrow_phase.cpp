@@ -108,13 +108,6 @@ void check_solver_options(const runtime::Context& context, const SolverOptions& 
   if (options.precision == Precision::double_ && !context.device().fp64)
     throw InputError("device " + context.device().name +
                      " has no double precision (neither cl_khr_fp64 nor cl_amd_fp64); use single precision");
-  // The conservative search keeps each query's earliest contact with a 64-bit atomic
-  // in double precision (refine.cl).
-  if (options.precision == Precision::double_ && options.solver == Solver::conservative &&
-      !context.device().int64_atomics)
-    throw InputError("device " + context.device().name +
-                     " has no 64-bit atomics (cl_khr_int64_base_atomics), which the conservative solver needs in "
-                     "double precision; use single precision or the cubic solver");
 }
 
 DeviceSolver::DeviceSolver(runtime::Context& context, const SolverOptions& options)
