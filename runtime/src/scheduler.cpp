@@ -105,10 +105,70 @@ struct Scheduler::State {
     st.capacity = items;
   }
 
-  // Grows a variable stream to hold `needed` items, with slack up to its limit.
-  void grow(StreamId s, std::size_t needed)
+  // Grows a variable stream to hold `needed` items, with slack up to its limit. Its
+  // producer runs again, so the old buffer goes first: the device need not hold both.
+  void grow(StreamId s, std::size_t needed, bool slack = true)
   {
-    allocate(s, std::min(grown(needed), std::max(state(s).limit, needed)));
+    state(s).buffer = Buffer();
+    state(s).capacity = 0;
+    allocate(s, slack ? std::min(grown(needed), std::max(state(s).limit, needed)) : needed);
+  }
+
+  // Passes whose registration segments hold items not merged yet: those of the stage
+  // being run and the pass being executed.
+  std::vector<const PassState*> busy;
+
+  // Runs `allocate`; when the device has no memory left, gives back the registration
+  // segments of every pass that holds nothing in them now (merged already, or not run
+  // yet this run; they are allocated again when they next run) and tries once more.
+  template <class Allocate> void with_memory(Allocate allocate)
+  {
+    try {
+      allocate();
+      return;
+    } catch (const DeviceMemoryExhausted&) {
+      if (!release_idle_segments()) throw;
+    }
+    allocate();
+  }
+
+  // Returns whether any memory was given back.
+  bool release_idle_segments()
+  {
+    bool freed = false;
+    for (auto& other : passes)
+      if (std::find(busy.begin(), busy.end(), &other) == busy.end())
+        for (auto& e : other.emitters)
+          if (e.items) {
+            e.items = Buffer();
+            freed = true;
+          }
+    return freed;
+  }
+
+  // Grows a stream that pass `p` emits into, giving back registration segments when
+  // the device has no memory left for it: first those of idle passes (with_memory),
+  // then the pass's own, which then emits this run through the global counter. Returns
+  // whether the pass must run again in full. A stream that does not fit even then is an
+  // error.
+  bool grow_output(PassState& p, StreamId s, std::size_t needed)
+  {
+    try {
+      with_memory([&] { grow(s, needed); });
+      return false;
+    } catch (const DeviceMemoryExhausted&) {
+    }
+    bool rerun = false;
+    if (p.mode != Registration::global_atomic) {
+      fall_back_to_global_counter(p);
+      rerun = true;
+    }
+    try {
+      grow(s, needed);
+    } catch (const DeviceMemoryExhausted&) {
+      grow(s, needed, false);
+    }
+    return rerun;
   }
 
   // The pass's own arguments; returns the index of the next one.
@@ -178,14 +238,25 @@ struct Scheduler::State {
     return options.registration == Registration::segmented_lock ? global / context.work_group_size() : global;
   }
 
+  // This run of the pass registers through one global counter, and its segments'
+  // memory goes back.
+  void fall_back_to_global_counter(PassState& p)
+  {
+    for (auto& e : p.emitters) e.items = Buffer();
+    if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
+    p.mode = Registration::global_atomic;
+    p.atomic_this_run = true;
+  }
+
   void prepare_segments(EmitterState& e, std::size_t global)
   {
     e.segments = segment_count(global);
     const std::size_t bytes = e.segments * e.segment_capacity * spec(e.stream).element_bytes;
     // Segments sized for an earlier burst give their memory back once it has passed.
-    if (e.items.bytes() > 4 * bytes + (1u << 20)) e.items = Buffer();
-    ensure_capacity(context, e.items, bytes, "registration segments");
-    ensure_capacity(context, e.counts, e.segments * sizeof(cl_uint), "registration counts");
+    // Growing ones too: their contents are written anew, so the device need not hold both.
+    if (e.items.bytes() > 4 * bytes + (1u << 20) || e.items.bytes() < bytes) e.items = Buffer();
+    with_memory([&] { ensure_capacity(context, e.items, bytes, "registration segments"); });
+    with_memory([&] { ensure_capacity(context, e.counts, e.segments * sizeof(cl_uint), "registration counts"); });
   }
 
   void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
@@ -194,7 +265,8 @@ struct Scheduler::State {
     // capacity that the buffers do not have.
     l.capacity = 0;
     for (auto& list : l.lists) list = Buffer();
-    for (auto& list : l.lists) list = Buffer(context, std::max<std::size_t>(items, 1) * item_bytes, "work list");
+    for (auto& list : l.lists)
+      with_memory([&] { list = Buffer(context, std::max<std::size_t>(items, 1) * item_bytes, "work list"); });
     l.capacity = items;
   }
 
@@ -207,7 +279,7 @@ struct Scheduler::State {
     ListState& l = *p.list;
     const std::string& label = p.spec->name;
     const std::size_t wg = context.work_group_size();
-    ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * w.state_bytes, "work list state");
+    with_memory([&] { ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * w.state_bytes, "work list state"); });
     if (n == 0) return;
     if (l.capacity < n) allocate_lists(l, grown(n), w.item_bytes);
     // A search deeper than this is a kernel that never settles, not work.
@@ -283,19 +355,22 @@ struct Scheduler::State {
       p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
       for (auto& e : p.emitters) {
         if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
-        if (p.mode != Registration::global_atomic && !segments_fit(e, global)) {
-          p.mode = Registration::global_atomic;
-          p.atomic_this_run = true;
-          if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
+        if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
+            !(release_idle_segments() && segments_fit(e, global)))
+          fall_back_to_global_counter(p);
+      }
+      // Each emitter's segments fit alone; all of them together may not.
+      if (p.mode != Registration::global_atomic) {
+        try {
+          for (auto& e : p.emitters) prepare_segments(e, global);
+        } catch (const DeviceMemoryExhausted&) {
+          fall_back_to_global_counter(p);
         }
       }
-      if (p.mode == Registration::global_atomic) {
-        // The next run tries small segments again.
+      // The next run tries small segments again.
+      if (p.mode == Registration::global_atomic)
         for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(*p.spec);
-      } else {
-        for (auto& e : p.emitters) prepare_segments(e, global);
-      }
-      if (p.spec->culls()) ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags");
+      if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
       bind_args(p);
       context.launch(p.active(), global, wg, tl(), label);
       ++p.stats.launches;
@@ -303,8 +378,10 @@ struct Scheduler::State {
     if (p.mode != Registration::global_atomic) {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
-        ensure_capacity(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
-        scan.exclusive(e.counts, offsets, e.segments, counters, dst.slot, tl(), label.c_str());
+        with_memory([&] {
+          ensure_capacity(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
+          scan.exclusive(e.counts, offsets, e.segments, counters, dst.slot, tl(), label.c_str());
+        });
         merge.set_args(e.items, cl_uint(words(e.stream)), e.counts, offsets, cl_uint(e.segments),
                        cl_uint(e.segment_capacity), cl_uint(options.registration == Registration::lock_free),
                        dst.buffer, cl_uint(dst.capacity));
@@ -313,8 +390,10 @@ struct Scheduler::State {
     }
     if (p.spec->culls()) {
       auto& dst = state(p.spec->cull_target);
-      compactor.compact(state(p.spec->cull_source).buffer, words(p.spec->cull_source), p.keep, n, dst.buffer,
-                        dst.capacity, counters, dst.slot, tl(), label.c_str());
+      with_memory([&] {
+        compactor.compact(state(p.spec->cull_source).buffer, words(p.spec->cull_source), p.keep, n, dst.buffer,
+                          dst.capacity, counters, dst.slot, tl(), label.c_str());
+      });
     }
   }
 
@@ -322,6 +401,7 @@ struct Scheduler::State {
   // reruns its producer until nothing did.
   void flush(const std::vector<PassState*>& stage)
   {
+    busy.assign(stage.begin(), stage.end());
     // Only variable-length outputs have counters to read.
     if (std::none_of(stage.begin(), stage.end(),
                      [](const PassState* p) { return !p->emitters.empty() || p->spec->culls(); }))
@@ -340,14 +420,14 @@ struct Scheduler::State {
             r = Redo::full;
           }
           if (host_counters[dst.slot] > dst.capacity) {
-            grow(e.stream, host_counters[dst.slot]);
-            r = std::max(r, atomic ? Redo::full : Redo::pack);
+            const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot]);
+            r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
           }
         }
         if (p->spec->culls()) {
           auto& dst = state(p->spec->cull_target);
           if (host_counters[dst.slot] > dst.capacity) {
-            grow(p->spec->cull_target, host_counters[dst.slot]);
+            with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); });
             r = std::max(r, Redo::pack);
           }
         }
@@ -417,11 +497,14 @@ struct Scheduler::State {
         flush(stage);
         stage.clear();
       }
+      busy.assign(stage.begin(), stage.end());
+      busy.push_back(&p);
       execute(p, Redo::full);
       if (p.spec->stops()) stop_if_raised(*p.spec);
       stage.push_back(&p);
     }
     flush(stage);
+    busy.clear();
     collect_stats();
   }
 

@@ -101,3 +101,40 @@ TEST_CASE("a kernel that fails to build is named with its log, and the context b
   Detector reference(cstreams::test::device(), describe(scene, 0));
   CHECK(same(step_contacts(detector, step), step_contacts(reference, step)));
 }
+
+TEST_CASE("a step that runs short of memory gives back registration segments and still reports every contact",
+          "[faults][quick]")
+{
+  const Scene scene = cstreams::test::cloth_funnel();
+  const Step step = load_step(scene, 0);
+  DetectorOptions tiny;
+  tiny.initial_capacity = 16;  // every variable stream grows during the step
+  Detector reference(cstreams::test::device(), describe(scene, 0), tiny);
+  const std::vector<Contact> expected = step_contacts(reference, step);
+  REQUIRE(!expected.empty());
+  const std::size_t peak = reference.stats().device_bytes();
+  std::size_t streams = 0;
+  for (const auto& s : reference.stats().run.streams) streams += s.bytes;
+  REQUIRE(peak > streams);
+
+  // Between what the streams alone hold and what segments add to them at the peak:
+  // either the step fits by giving segments back, or it fails naming the allocation.
+  std::size_t fitted = 0;
+  for (double share : {0.25, 0.5, 0.75}) {
+    runtime::Context context(filter_from_environment());
+    Detector detector(context, describe(scene, 0), tiny);
+    const std::size_t limit = streams + std::size_t(double(peak - streams) * share);
+    context.set_memory_limit(limit);
+    INFO("limit " << limit << " bytes, peak " << peak << ", streams " << streams);
+    std::vector<Contact> got;
+    try {
+      got = step_contacts(detector, step);
+    } catch (const runtime::DeviceMemoryExhausted& e) {
+      UNSCOPED_INFO("share " << share << ": " << e.what());
+      continue;
+    }
+    CHECK(same(got, expected));
+    ++fitted;
+  }
+  CHECK(fitted > 0);
+}
