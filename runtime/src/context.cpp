@@ -147,9 +147,10 @@ void Context::launch(const Kernel& kernel, std::size_t global, std::size_t local
   if (global == 0) return;
   if (local) global = round_up(global, local);
   cl_event event = nullptr;
-  check(clEnqueueNDRangeKernel(queue_.get(), kernel.get(), 1, nullptr, &global, local ? &local : nullptr, 0,
-                               nullptr, timeline ? &event : nullptr),
-        "clEnqueueNDRangeKernel", "launching " + kernel.name() + " over " + std::to_string(global) + " work-items");
+  check_with(clEnqueueNDRangeKernel(queue_.get(), kernel.get(), 1, nullptr, &global, local ? &local : nullptr, 0,
+                                    nullptr, timeline ? &event : nullptr),
+             "clEnqueueNDRangeKernel",
+             [&] { return "launching " + kernel.name() + " over " + std::to_string(global) + " work-items"; });
   ++kernel_launches_;
   if (timeline) timeline->record(label.empty() ? kernel.name() : std::string(label), out_event(timeline, event));
 }
@@ -158,9 +159,9 @@ void Context::write(const Buffer& buffer, const void* data, std::size_t bytes, s
 {
   if (bytes == 0) return;
   cl_event event = nullptr;
-  check(clEnqueueWriteBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
-                             timeline ? &event : nullptr),
-        "clEnqueueWriteBuffer", "uploading " + std::to_string(bytes) + " bytes");
+  check_with(clEnqueueWriteBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
+                                  timeline ? &event : nullptr),
+             "clEnqueueWriteBuffer", [&] { return "uploading " + std::to_string(bytes) + " bytes"; });
   if (timeline) timeline->record("upload", out_event(timeline, event));
 }
 
@@ -169,9 +170,9 @@ void Context::copy(const Buffer& source, const Buffer& destination, std::size_t 
 {
   if (bytes == 0) return;
   cl_event event = nullptr;
-  check(clEnqueueCopyBuffer(queue_.get(), source.get(), destination.get(), source_offset, destination_offset, bytes, 0,
-                            nullptr, timeline ? &event : nullptr),
-        "clEnqueueCopyBuffer", "copying " + std::to_string(bytes) + " bytes");
+  check_with(clEnqueueCopyBuffer(queue_.get(), source.get(), destination.get(), source_offset, destination_offset,
+                                 bytes, 0, nullptr, timeline ? &event : nullptr),
+             "clEnqueueCopyBuffer", [&] { return "copying " + std::to_string(bytes) + " bytes"; });
   if (timeline) timeline->record("copy", out_event(timeline, event));
 }
 
@@ -179,9 +180,9 @@ void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::siz
 {
   if (bytes == 0) return;
   cl_event event = nullptr;
-  check(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
-                            timeline ? &event : nullptr),
-        "clEnqueueReadBuffer", "reading back " + std::to_string(bytes) + " bytes");
+  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr,
+                                 timeline ? &event : nullptr),
+             "clEnqueueReadBuffer", [&] { return "reading back " + std::to_string(bytes) + " bytes"; });
   ++blocking_reads_;
   if (timeline) timeline->record("readback", out_event(timeline, event));
 }
@@ -191,9 +192,9 @@ void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t fi
 {
   if (count == 0) return;
   cl_event event = nullptr;
-  check(clEnqueueFillBuffer(queue_.get(), buffer.get(), &value, sizeof(value), first * sizeof(value),
-                            count * sizeof(value), 0, nullptr, timeline ? &event : nullptr),
-        "clEnqueueFillBuffer", "clearing " + std::to_string(count) + " counters");
+  check_with(clEnqueueFillBuffer(queue_.get(), buffer.get(), &value, sizeof(value), first * sizeof(value),
+                                 count * sizeof(value), 0, nullptr, timeline ? &event : nullptr),
+             "clEnqueueFillBuffer", [&] { return "clearing " + std::to_string(count) + " counters"; });
   if (timeline) timeline->record("fill", out_event(timeline, event));
 }
 
@@ -244,8 +245,8 @@ void ensure_capacity(Context& context, Buffer& buffer, std::size_t bytes, const 
 
 void Kernel::set_raw(unsigned index, std::size_t size, const void* value) const
 {
-  check(clSetKernelArg(kernel_.get(), index, size, value), "clSetKernelArg",
-        "setting argument " + std::to_string(index) + " of " + name_);
+  check_with(clSetKernelArg(kernel_.get(), index, size, value), "clSetKernelArg",
+             [&] { return "setting argument " + std::to_string(index) + " of " + name_; });
 }
 
 void Timeline::record(std::string label, Handle<cl_event> event)

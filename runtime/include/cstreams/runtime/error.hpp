@@ -90,4 +90,11 @@ inline void check(cl_int status, const char* call, std::string_view context = {}
   if (status != CL_SUCCESS) throw ClError(status, call, std::string(context));
 }
 
+// The same where the call runs a thousand times a step: `describe()` builds the
+// context only on failure.
+template <class Describe> void check_with(cl_int status, const char* call, Describe describe)
+{
+  if (status != CL_SUCCESS) throw ClError(status, call, describe());
+}
+
 }  // namespace cstreams::runtime
