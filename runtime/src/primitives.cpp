@@ -107,15 +107,6 @@ std::size_t Sorter::block_records(std::size_t words) const
   return block >= 2 ? block : 0;
 }
 
-std::size_t Sorter::launches(std::size_t n, std::size_t words) const
-{
-  if (n < 2) return 0;
-  const std::size_t block = block_records(words);
-  std::size_t launches = block ? 1 : 0;
-  for (std::size_t width = std::max<std::size_t>(block, 1); width < n; width *= 2) ++launches;
-  return launches;
-}
-
 const Buffer& Sorter::sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline,
                            const char* label)
 {

@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <cstdint>
 #include <cstring>
 #include <string>
 
@@ -59,6 +60,7 @@ void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams
   runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
+  const std::uint64_t launches = context_.kernel_launches();
   std::size_t first = 0;
   for (const auto& [stream, kind] : streams.contacts) {
     const std::size_t count = scheduler.count(stream);
@@ -66,11 +68,10 @@ void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams
                            cl_uint(double_time_), scheduler.buffer(streams.faces), scheduler.buffer(streams.edges),
                            scheduler.buffer(streams.vertex_object), first_vertex_, records_, cl_uint(first));
     context_.launch(make_records_, count, context_.work_group_size(), events, stats.name);
-    stats.launches += count > 0;
     first += count;
   }
   const runtime::Buffer& sorted = sorter_.sort(records_, n, record_words, events, stats.name.c_str());
-  stats.launches += unsigned(sorter_.launches(n, record_words));
+  stats.launches = unsigned(context_.kernel_launches() - launches);
   const std::size_t bytes = n * record_words * sizeof(cl_uint);
   runtime::ensure_capacity(context_, staging_, bytes, "contact records");
   context_.read(sorted, staging_.data(), bytes);

@@ -73,8 +73,6 @@ public:
   const Buffer& sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline = nullptr,
                      const char* label = "sort");
   std::size_t scratch_bytes() const { return scratch_.bytes(); }
-  // Launches a sort of n records takes.
-  std::size_t launches(std::size_t n, std::size_t words) const;
 
 private:
   // Records a work-group sorts in local memory: a power of two, or 0 where fewer than
