@@ -76,12 +76,9 @@ std::string step_prefix(const fs::path& folder)
   throw InputError(folder.string() + ": boxes/ holds no <step>vf.json");
 }
 
-}  // namespace
-
-Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
+// The one-object scene of a real step's two frames.
+Scene step_scene(const fs::path& folder)
 {
-  const fs::path folder(step_folder);
-  const std::string step = step_prefix(folder);
   std::vector<std::string> frames;
   for (const auto& e : fs::directory_iterator(folder / "frames")) frames.push_back(e.path().string());
   // Frame files are named by number; order them numerically, not by text.
@@ -92,8 +89,15 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
     return begin < end ? std::stol(stem.substr(begin, end - begin)) : 0L;
   };
   std::sort(frames.begin(), frames.end(), [&](const auto& a, const auto& b) { return number(a) < number(b); });
-  if (frames.size() != 2) throw InputError(step_folder + ": expected two frames in frames/");
-  const Scene scene = scene_from_frames(frames);
+  if (frames.size() != 2) throw InputError(folder.string() + ": expected two frames in frames/");
+  return scene_from_frames(frames);
+}
+
+// The queries of one kind of a real step whose scene is loaded, in the order of its
+// boxes/ file.
+Dataset step_dataset(const fs::path& folder, const Scene& scene, ContactKind kind)
+{
+  const std::string step = step_prefix(folder);
   const Step s = load_step(scene, 0);
   const Topology& t = scene.objects[0].topology;
   const std::uint64_t nv = t.vertex_count, ne = t.edges.size(), nf = t.faces.size();
@@ -125,7 +129,7 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
   }
   d.collides = read_bool_array((folder / "mma_bool" / (step + kind_suffix(kind) + "_mma_bool.json")).string());
   if (d.collides.size() != d.queries.size())
-    throw InputError(step_folder + ": mma_bool and boxes disagree in length for " + kind_suffix(kind));
+    throw InputError(folder.string() + ": mma_bool and boxes disagree in length for " + kind_suffix(kind));
 
   d.exact_toi.assign(d.queries.size(), std::nanl(""));
   const fs::path tois = toi_folder(folder);
@@ -151,6 +155,13 @@ Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
   return d;
 }
 
+}  // namespace
+
+Dataset real_step_dataset(const std::string& step_folder, ContactKind kind)
+{
+  return step_dataset(step_folder, step_scene(step_folder), kind);
+}
+
 const char* StepTruth::Answer::verdict(const std::optional<double>& toi) const
 {
   if (!collides) return toi ? "false positive" : "right";
@@ -165,17 +176,17 @@ std::optional<StepTruth> StepTruth::for_frames(const std::vector<std::string>& f
   if (frames.filename() != "frames" || fs::absolute(frame_paths[1]).parent_path() != frames) return std::nullopt;
   const fs::path folder = frames.parent_path();
   if (!fs::is_directory(folder / "boxes") || !fs::is_directory(folder / "mma_bool")) return std::nullopt;
+  const Scene scene = step_scene(folder);
   StepTruth truth;
   for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) {
-    const Dataset d = real_step_dataset(folder.string(), kind);
+    const Dataset d = step_dataset(folder, scene, kind);
     for (std::size_t i = 0; i < d.features.size(); ++i) {
       auto [a, b] = d.features[i];
       if (kind == ContactKind::edge_edge && b < a) std::swap(a, b);
       truth.answers_[{kind, a, b}] = {d.collides[i], d.exact_toi[i]};
     }
   }
-  // Ids as real_step_dataset names them: the first object's own topology.
-  const Scene scene = scene_from_frames(frame_paths);
+  // Ids as the step's datasets name them: the object's own topology.
   const Topology& t = scene.objects[0].topology;
   for (std::uint32_t f = 0; f < t.faces.size(); ++f) truth.face_of_[t.faces[f]] = f;
   for (std::uint32_t e = 0; e < t.edges.size(); ++e) truth.edge_of_[t.edges[e]] = e;
@@ -218,7 +229,8 @@ std::vector<Dataset> discover_datasets(const std::string& path)
   if (fs::is_directory(p / "vertex-face") || fs::is_directory(p / "edge-edge")) {
     handmade(p, out);
   } else if (fs::is_directory(p / "frames") && fs::is_directory(p / "boxes") && fs::is_directory(p / "mma_bool")) {
-    for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) out.push_back(real_step_dataset(path, kind));
+    const Scene scene = step_scene(p);
+    for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) out.push_back(step_dataset(p, scene, kind));
   } else {
     std::vector<fs::path> children;
     for (const auto& e : fs::directory_iterator(p))
