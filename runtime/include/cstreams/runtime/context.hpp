@@ -62,7 +62,7 @@ public:
 
   // The loop trips a work-item may make in all before the device ends its loops (Mesa's
   // llvmpipe ends them after 65535), or the lower limit asked for; 0: no limit. Kernels
-  // see it as CS_LOOP_TRIPS and keep within it (cl_kernels/runtime/common.h).
+  // see it as CS_LOOP_TRIPS and keep within it (cl_kernels/runtime/loop_trips.h).
   std::uint32_t loop_trip_limit() const noexcept { return loop_trip_limit_; }
 
   // Launches a 1-D range of `global` work-items (rounded up to `local`; 0 lets the
