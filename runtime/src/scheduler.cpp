@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <map>
 #include <optional>
 
@@ -118,31 +119,41 @@ struct Scheduler::State {
   // being run and the pass being executed.
   std::vector<const PassState*> busy;
 
-  // Runs `allocate`; when the device has no memory left, gives back the registration
-  // segments of every pass that holds nothing in them now (merged already, or not run
-  // yet this run; they are allocated again when they next run) and tries once more.
+  // Runs `allocate`; when the device has no memory left, gives back the scratch of
+  // every pass that holds nothing in it now (done already, or not run yet this run; it
+  // is allocated again when the pass next runs) and tries once more.
   template <class Allocate> void with_memory(Allocate allocate)
   {
     try {
       allocate();
       return;
     } catch (const DeviceMemoryExhausted&) {
-      if (!release_idle_segments()) throw;
+      if (!release_idle_scratch()) throw;
     }
     allocate();
   }
 
-  // Returns whether any memory was given back.
-  bool release_idle_segments()
+  // Registration segments, cull flags and work lists of the passes outside the stage
+  // being run. Returns whether any memory was given back.
+  bool release_idle_scratch()
   {
     bool freed = false;
-    for (auto& other : passes)
-      if (std::find(busy.begin(), busy.end(), &other) == busy.end())
-        for (auto& e : other.emitters)
-          if (e.items) {
-            e.items = Buffer();
-            freed = true;
-          }
+    const auto release = [&](Buffer& b) {
+      if (b) {
+        b = Buffer();
+        freed = true;
+      }
+    };
+    for (auto& other : passes) {
+      if (std::find(busy.begin(), busy.end(), &other) != busy.end()) continue;
+      for (auto& e : other.emitters) release(e.items);
+      release(other.keep);
+      if (auto& l = other.list) {
+        release(l->state);
+        for (auto& list : l->lists) release(list);
+        l->capacity = 0;
+      }
+    }
     return freed;
   }
 
@@ -356,7 +367,7 @@ struct Scheduler::State {
       for (auto& e : p.emitters) {
         if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
         if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
-            !(release_idle_segments() && segments_fit(e, global)))
+            !(release_idle_scratch() && segments_fit(e, global)))
           fall_back_to_global_counter(p);
       }
       // Each emitter's segments fit alone; all of them together may not.
@@ -397,6 +408,20 @@ struct Scheduler::State {
     }
   }
 
+  // After the stage's counters are read: whether an output of the pass overflowed its
+  // segments or its stream.
+  bool overflowed(const PassState& p)
+  {
+    const bool atomic = p.mode == Registration::global_atomic;
+    for (const auto& e : p.emitters)
+      if ((!atomic && host_counters[e.overflow_slot] > e.segment_capacity) ||
+          host_counters[state(e.stream).slot] > state(e.stream).capacity)
+        return true;
+    if (!p.spec->culls()) return false;
+    const auto& target = state(p.spec->cull_target);
+    return host_counters[target.slot] > target.capacity;
+  }
+
   // Reads every counter of the stage in one transfer; grows what overflowed and
   // reruns its producer until nothing did.
   void flush(const std::vector<PassState*>& stage)
@@ -409,8 +434,14 @@ struct Scheduler::State {
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
+      // A pass whose outputs all fit is done: its segments hold nothing needed any more,
+      // and may go back if growing another pass's output runs short of memory.
+      std::vector<PassState*> overflowing;
+      std::copy_if(stage.begin(), stage.end(), std::back_inserter(overflowing),
+                   [&](PassState* p) { return overflowed(*p); });
+      busy.assign(overflowing.begin(), overflowing.end());
       std::vector<std::pair<PassState*, Redo>> redo;
-      for (PassState* p : stage) {
+      for (PassState* p : overflowing) {
         const bool atomic = p->mode == Registration::global_atomic;
         Redo r = Redo::none;
         for (auto& e : p->emitters) {

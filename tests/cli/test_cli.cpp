@@ -7,6 +7,7 @@
 #include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/error.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -195,6 +196,54 @@ TEST_CASE("run --earliest-only counts the same contacts and gives the earliest t
   CHECK(rounded >= double(std::nextafter(float(exact), 0.0f)));
   CHECK_THAT(parse({"run", a, b, "--earliest-only", "--out", (dir / "c.csv").string()}),
              Catch::Contains("--earliest-only"));
+}
+
+TEST_CASE("run --memory-budget keeps the step under the budget with the same contacts, or names what does not fit",
+          "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-memory-budget";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
+  const auto text = [](const fs::path& file) {
+    std::ifstream in(file);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  execute({"run", a, b, "--json", (dir / "free.json").string(), "--out", (dir / "free.csv").string()});
+  const auto free_step = nlohmann::json::parse(std::ifstream(dir / "free.json"))["steps"][0];
+  const std::size_t peak = free_step["device_bytes"];
+  std::size_t streams = 0;
+  for (const auto& s : free_step["streams"]) streams += s["bytes"].get<std::size_t>();
+  REQUIRE(peak > streams);  // registration segments on top of the streams
+
+  // Between the streams alone and the peak: segments go back, registration falls back
+  // to one counter, and the contacts stay the same; or the step fails naming the
+  // allocation.
+  int fitted = 0;
+  for (double share : {0.5, 0.75, 0.9}) {
+    const double budget_mb = (double(streams) + share * double(peak - streams)) / (1 << 20);
+    const fs::path json = dir / "budget.json", csv = dir / "budget.csv";
+    INFO("budget " << budget_mb << " MiB, peak " << peak << " bytes, streams " << streams);
+    try {
+      execute({"run", a, b, "--memory-budget", std::to_string(budget_mb), "--json", json.string(), "--out", csv.string()});
+    } catch (const cstreams::runtime::DeviceMemoryExhausted& e) {
+      UNSCOPED_INFO("share " << share << ": " << e.what());
+      continue;
+    }
+    const auto j = nlohmann::json::parse(std::ifstream(json));
+    CHECK(j["memory_budget_mb"].get<double>() == Approx(budget_mb));
+    CHECK(j["steps"][0]["device_bytes"].get<double>() <= budget_mb * (1 << 20));
+    CHECK(text(csv) == text(dir / "free.csv"));
+    ++fitted;
+  }
+  CHECK(fitted > 0);
+
+  // Far below what the streams need: an error naming the allocation, and no output.
+  const fs::path csv = dir / "tiny.csv";
+  CHECK_THROWS_WITH(execute({"run", a, b, "--memory-budget", "0.01", "--out", csv.string()}),
+                    Catch::Contains("MiB") && Catch::Contains("in use"));
+  CHECK_FALSE(fs::exists(csv));
+  CHECK_THAT(parse({"run", a, b, "--memory-budget", "-1"}), Catch::StartsWith("--memory-budget = -1: must be"));
 }
 
 TEST_CASE("accuracy on several devices reports false negatives and positives per device", "[cli][quick]")

@@ -60,6 +60,8 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
                  "Conservative solver's work limit per pair; reaching it reports a collision");
   cmd.add_option("--front", o.front, "BVTT front: none, exact or deferred");
   cmd.add_option("--front-budget", o.front_budget, "Deferred front: device memory for the front, MiB");
+  cmd.add_option("--memory-budget", o.memory_budget,
+                 "Device memory for the whole pipeline, MiB: registration trades speed for memory to stay under it");
   cmd.add_option("--registration", o.registration, "segmented-lock, lock-free or global-atomic");
   cmd.add_option("--frames", o.frames, "Steps A:B (from frame A to B), or one step A; default: all");
   cmd.add_option("--repeat", o.repeat, "Run each step this many times and report medians (the first is a warm-up)");
@@ -85,6 +87,7 @@ void check(const MeasureOptions& o)
   check_option("--min-separation", o.min_separation, option_ranges::min_separation);
   check_option("--max-iterations", o.max_iterations, option_ranges::max_iterations);
   check_option("--front-budget", o.front_budget, option_ranges::front_budget_mb);
+  if (o.memory_budget != 0) check_option("--memory-budget", o.memory_budget, option_ranges::memory_budget_mb);
   check_option("--repeat", o.repeat, {1, 1000000});
   detector_options(o);
   parse_step_range(o.frames);
@@ -124,6 +127,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   Measurement m;
   m.device = context.device().name + (context.device().profile.empty() ? "" : " as " + context.device().profile);
   m.platform = context.device().platform_name;
+  if (o.memory_budget > 0) context.set_memory_limit(std::size_t(o.memory_budget * (1 << 20)));
   Detector detector(context, describe(scene, first), detector_options(o));
   const bool terminal = ::isatty(STDERR_FILENO);
   // A device without a kernel timer reports times as unknown (NaN; null in JSON).

@@ -27,6 +27,10 @@ struct MeasureOptions {
   double min_separation = 0;
   std::uint32_t max_iterations = SolverOptions{}.max_iterations;
   double front_budget = DetectorOptions{}.front_budget_mb;
+  // Device memory the whole pipeline may hold, MiB (Context::set_memory_limit); 0: all
+  // the device has. Under it, registration gives segments back and falls back to one
+  // counter rather than fail; what does not fit even then is an error naming it.
+  double memory_budget = 0;
   std::string frames;
   unsigned repeat = 1;
   // Read back only the earliest time of impact per object, not the contacts.

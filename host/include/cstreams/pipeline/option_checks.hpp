@@ -19,6 +19,7 @@ inline constexpr OptionRange tolerance{0, 1, true, false};
 inline constexpr OptionRange min_separation{0, 1e30};
 inline constexpr OptionRange max_iterations{1, 4294967295.0};
 inline constexpr OptionRange front_budget_mb{0, 1 << 20, true, false};
+inline constexpr OptionRange memory_budget_mb{0, 1 << 30, true, false};
 }  // namespace option_ranges
 
 // Throws InputError "<name> = <value>: must be <range>" unless `range` contains `value`.
