@@ -13,7 +13,14 @@
  * work-items per group and packs the result:
  *   CS_REG_GLOBAL_ATOMIC   one device counter for the whole stream (the baseline);
  *   CS_REG_SEGMENTED_LOCK  a segment per work-group claimed through a local counter,
- *                          then prefix sum and merge (the paper's segmented lock);
+ *                          then prefix sum and merge (the paper's segmented lock).
+ *                          Segments are planned from the last run: group g's segment
+ *                          holds what group g emitted then and a quarter more
+ *                          (cs_segment_base below), so memory follows the work where
+ *                          it is, not the busiest group. What a segment cannot hold
+ *                          goes to a spill pool of CS_SPILL_PER_GROUP items a group,
+ *                          shared by all groups through the overflow slot, with its
+ *                          group and rank, so that the merge still puts it in order;
  *   CS_REG_LOCK_FREE       a segment per work-item with a private counter, then
  *                          prefix sum and merge (the paper's lock-free variant).
  * Counters keep counting past capacity; an overflowing segment also raises its pass's
@@ -26,9 +33,22 @@
 #define CS_REG_SEGMENTED_LOCK 1
 #define CS_REG_LOCK_FREE 2
 
+/* Segmented lock: where group g's segment starts, given the last run's segment offsets
+ * `plan` (planned groups, then their total). A group the last run had gets what it
+ * emitted then and a quarter more; a group it did not have gets `fresh`. The spill
+ * pool follows the last group's segment. The scheduler sizes the buffer by the same
+ * rules (segment_items in scheduler.cpp). */
+#define CS_SPILL_PER_GROUP 16u
+inline uint cs_segment_base(__global const uint* plan, const uint planned, const uint fresh, const uint g)
+{
+  const uint k = min(g, planned), o = plan[k];
+  return o + o / 4u + (g - k) * fresh;
+}
+
 #define CS_EMITTER_PARAMS(T, P)                                                               \
   __global T* P##_out, __global uint* P##_counts, const uint P##_capacity,                    \
-      __global uint* P##_counters, const uint P##_slot
+      __global uint* P##_counters, const uint P##_slot, __global const uint* P##_plan,        \
+      const uint P##_planned
 
 #if !defined(CS_REGISTRATION)
 /* Built outside a scheduler: any use of an emitter fails to compile with this name
@@ -48,21 +68,40 @@
 #define CS_EMITTER_END(P) (void)0
 
 #elif CS_REGISTRATION == CS_REG_SEGMENTED_LOCK
+/* P_plan holds the last run's P_planned + 1 segment offsets (the exclusive prefix sum of
+ * its group counts, then their total); P_capacity is the room of a group it did not
+ * have. P_counts holds each group's count, then (group, rank) of each spilled item. The
+ * overflow slot counts spilled items, past the pool's size too. The group's segment
+ * (start, room, spill pool's start) sits in local memory: read from the plan at each
+ * emit, the compiler would load it early and hold it in registers through the kernel. */
 #define CS_EMITTER_BEGIN(P)                                                                   \
-  __local uint P##_group_count;                                                               \
-  if (get_local_id(0) == 0) P##_group_count = 0;                                              \
+  __local uint P##_group_count, P##_segment[3];                                               \
+  if (get_local_id(0) == 0) {                                                                 \
+    const uint cs_g_ = (uint)get_group_id(0);                                                 \
+    P##_group_count = 0;                                                                      \
+    P##_segment[0] = cs_segment_base(P##_plan, P##_planned, P##_capacity, cs_g_);             \
+    P##_segment[1] = cs_segment_base(P##_plan, P##_planned, P##_capacity, cs_g_ + 1u) - P##_segment[0]; \
+    P##_segment[2] = cs_segment_base(P##_plan, P##_planned, P##_capacity, (uint)get_num_groups(0)); \
+  }                                                                                           \
   barrier(CLK_LOCAL_MEM_FENCE)
 #define CS_EMIT(P, value)                                                                     \
   do {                                                                                        \
     const uint cs_at_ = atomic_inc(&P##_group_count);                                         \
-    if (cs_at_ < P##_capacity) P##_out[(size_t)get_group_id(0) * P##_capacity + cs_at_] = (value); \
+    if (cs_at_ < P##_segment[1]) {                                                            \
+      P##_out[P##_segment[0] + cs_at_] = (value);                                             \
+    } else {                                                                                  \
+      const uint cs_groups_ = (uint)get_num_groups(0);                                        \
+      const uint cs_spill_ = atomic_inc(&P##_counters[P##_slot]);                             \
+      if (cs_spill_ < cs_groups_ * CS_SPILL_PER_GROUP) {                                      \
+        P##_out[P##_segment[2] + cs_spill_] = (value);                                        \
+        P##_counts[cs_groups_ + 2u * cs_spill_] = (uint)get_group_id(0);                      \
+        P##_counts[cs_groups_ + 2u * cs_spill_ + 1u] = cs_at_;                                \
+      }                                                                                       \
+    }                                                                                         \
   } while (0)
 #define CS_EMITTER_END(P)                                                                     \
   barrier(CLK_LOCAL_MEM_FENCE);                                                               \
-  if (get_local_id(0) == 0) {                                                                 \
-    P##_counts[get_group_id(0)] = P##_group_count;                                            \
-    atomic_max(&P##_counters[P##_slot], P##_group_count);                                     \
-  }
+  if (get_local_id(0) == 0) P##_counts[get_group_id(0)] = P##_group_count
 
 #elif CS_REGISTRATION == CS_REG_LOCK_FREE
 #define CS_EMITTER_BEGIN(P) uint P##_count = 0

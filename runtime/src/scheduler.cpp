@@ -30,9 +30,18 @@ struct EmitterState {
   Buffer items;   // registration segments
   Buffer counts;  // one count per segment
   std::size_t segments = 0;
-  std::size_t segment_capacity = 0;
+  std::size_t segment_capacity = 0;  // lock-free: items a work-item's segment holds
   std::uint32_t overflow_slot = no_slot;
+  // Segmented lock: this execution's segment offsets (the prefix sum of its counts,
+  // then their total), and the last execution's, which plan this one's segments.
+  Buffer offsets, plan;
+  std::size_t planned = 0;        // segments the plan covers; 0: none yet
+  std::size_t planned_total = 0;  // items they emitted
 };
+
+// Segmented lock: the spill pool's items per group (CS_SPILL_PER_GROUP in
+// cl_kernels/runtime/registration.h).
+constexpr std::uint64_t spill_per_group = 16;
 
 // A work list's device side (Worklist in stream_graph.hpp).
 constexpr std::size_t list_words = 10;
@@ -74,7 +83,9 @@ std::string registration_define(Registration r)
 struct Scheduler::State {
   State(Context& c, StreamGraph g, SchedulerOptions o)
       : context(c), graph(std::move(g)), options(o), scan(c), compactor(c, scan),
-        merge(c.programs().kernel("runtime/compact.cl", "cs_merge_segments"))
+        merge_interleaved(c.programs().kernel("runtime/compact.cl", "cs_merge_interleaved")),
+        merge_planned(c.programs().kernel("runtime/compact.cl", "cs_merge_planned")),
+        no_plan(c, sizeof(cl_uint), "registration plan")
   {
   }
 
@@ -83,8 +94,9 @@ struct Scheduler::State {
   SchedulerOptions options;
   Scan scan;
   Compactor compactor;
-  Kernel merge;
-  Buffer offsets;
+  Kernel merge_interleaved, merge_planned;
+  Buffer offsets;  // lock-free segments' offsets
+  Buffer no_plan;  // one zero: the plan of segments that have none
   Buffer counters;
   std::vector<std::uint32_t> host_counters;
   std::vector<StreamState> streams;
@@ -215,12 +227,24 @@ struct Scheduler::State {
         k.set_arg(index++, cl_uint(dst.capacity));
         k.set_arg(index++, counters);
         k.set_arg(index++, cl_uint(dst.slot));
+        k.set_arg(index++, counters);
+        k.set_arg(index++, cl_uint(0));
+      } else if (p.mode == Registration::segmented_lock) {
+        k.set_arg(index++, e.items);
+        k.set_arg(index++, e.counts);
+        k.set_arg(index++, cl_uint(first_segment_capacity(*p.spec)));
+        k.set_arg(index++, counters);
+        k.set_arg(index++, cl_uint(e.overflow_slot));
+        k.set_arg(index++, plan_of(e));
+        k.set_arg(index++, cl_uint(e.planned));
       } else {
         k.set_arg(index++, e.items);
         k.set_arg(index++, e.counts);
         k.set_arg(index++, cl_uint(e.segment_capacity));
         k.set_arg(index++, counters);
         k.set_arg(index++, cl_uint(e.overflow_slot));
+        k.set_arg(index++, e.counts);
+        k.set_arg(index++, cl_uint(0));
       }
     }
     if (p.spec->culls()) k.set_arg(index++, p.keep);
@@ -233,13 +257,28 @@ struct Scheduler::State {
         1, std::size_t(std::ceil(spec.items_per_work_item * double(per_group ? context.work_group_size() : 1))));
   }
 
-  // Segments hold as much as the busiest segment of the last run, so one burst (a
-  // first step searched from the roots, say) can ask for more memory than the device
-  // has, or than is left of it. Then the pass registers this run through one global
-  // counter instead: slower under contention, but its memory is the stream itself.
-  bool segments_fit(const EmitterState& e, std::size_t global) const
+  const Buffer& plan_of(const EmitterState& e) const { return e.planned ? e.plan : no_plan; }
+
+  // Items the segments of `segments` groups hold: the lock-free ones each hold as much
+  // as the busiest of the last run; segmented-lock ones follow the last run's plan
+  // (cs_segment_base at `segments`, bounded by the plan's total), then the spill pool.
+  std::uint64_t segment_items(const PassSpec& pass, const EmitterState& e, std::size_t segments) const
   {
-    const std::size_t bytes = segment_count(global) * e.segment_capacity * spec(e.stream).element_bytes;
+    if (segments == 0) return 0;
+    if (options.registration == Registration::lock_free) return std::uint64_t(segments) * e.segment_capacity;
+    const std::uint64_t planned = std::min(segments, e.planned), total = e.planned_total;
+    return total + total / 4 + (segments - planned) * first_segment_capacity(pass) + segments * spill_per_group;
+  }
+
+  // Segments follow the last run, so one burst (a first step searched from the roots,
+  // say) can ask for more memory than the device has, or than is left of it. Then the
+  // pass registers this run through one global counter instead: slower under
+  // contention, but its memory is the stream itself.
+  bool segments_fit(const PassSpec& pass, const EmitterState& e, std::size_t global) const
+  {
+    const std::uint64_t items = segment_items(pass, e, segment_count(global));
+    if (items > 0xffffffffu) return false;  // the kernels index segments with 32 bits
+    const std::size_t bytes = std::size_t(items) * spec(e.stream).element_bytes;
     const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
     return bytes <= context.device().max_allocation && in_use <= limit && bytes <= limit - in_use;
   }
@@ -259,15 +298,18 @@ struct Scheduler::State {
     p.atomic_this_run = true;
   }
 
-  void prepare_segments(EmitterState& e, std::size_t global)
+  void prepare_segments(const PassSpec& pass, EmitterState& e, std::size_t global)
   {
     e.segments = segment_count(global);
-    const std::size_t bytes = e.segments * e.segment_capacity * spec(e.stream).element_bytes;
-    // Segments sized for an earlier burst give their memory back once it has passed.
+    const std::size_t bytes = std::size_t(segment_items(pass, e, e.segments)) * spec(e.stream).element_bytes;
+    // Segments sized for an earlier burst (or for groups without a plan) give their
+    // memory back once it has passed.
     // Growing ones too: their contents are written anew, so the device need not hold both.
-    if (e.items.bytes() > 4 * bytes + (1u << 20) || e.items.bytes() < bytes) e.items = Buffer();
+    if (e.items.bytes() > 2 * bytes + (1u << 20) || e.items.bytes() < bytes) e.items = Buffer();
     with_memory([&] { ensure_capacity(context, e.items, bytes, "registration segments"); });
-    with_memory([&] { ensure_capacity(context, e.counts, e.segments * sizeof(cl_uint), "registration counts"); });
+    // Segmented lock: each spilled item's group and rank follow the counts.
+    const std::size_t words = options.registration == Registration::segmented_lock ? 1 + 2 * spill_per_group : 1;
+    with_memory([&] { ensure_capacity(context, e.counts, e.segments * words * sizeof(cl_uint), "registration counts"); });
   }
 
   void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
@@ -366,14 +408,15 @@ struct Scheduler::State {
       p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
       for (auto& e : p.emitters) {
         if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
-        if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
-            !(release_idle_scratch() && segments_fit(e, global)))
+        forget_stale_plan(e, segment_count(global));
+        if (p.mode != Registration::global_atomic && !segments_fit(*p.spec, e, global) &&
+            !(release_idle_scratch() && segments_fit(*p.spec, e, global)))
           fall_back_to_global_counter(p);
       }
       // Each emitter's segments fit alone; all of them together may not.
       if (p.mode != Registration::global_atomic) {
         try {
-          for (auto& e : p.emitters) prepare_segments(e, global);
+          for (auto& e : p.emitters) prepare_segments(*p.spec, e, global);
         } catch (const DeviceMemoryExhausted&) {
           fall_back_to_global_counter(p);
         }
@@ -386,17 +429,28 @@ struct Scheduler::State {
       context.launch(p.active(), global, wg, tl(), label);
       ++p.stats.launches;
     }
-    if (p.mode != Registration::global_atomic) {
+    if (p.mode == Registration::lock_free) {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
         with_memory([&] {
           ensure_capacity(context, offsets, e.segments * sizeof(cl_uint), "registration offsets");
           scan.exclusive(e.counts, offsets, e.segments, counters, dst.slot, tl(), label.c_str());
         });
-        merge.set_args(e.items, cl_uint(words(e.stream)), e.counts, offsets, cl_uint(e.segments),
-                       cl_uint(e.segment_capacity), cl_uint(options.registration == Registration::lock_free),
-                       dst.buffer, cl_uint(dst.capacity));
-        context.launch(merge, e.segments * e.segment_capacity, wg, tl(), label);
+        merge_interleaved.set_args(e.items, cl_uint(words(e.stream)), e.counts, offsets, cl_uint(e.segments),
+                                   cl_uint(e.segment_capacity), dst.buffer, cl_uint(dst.capacity));
+        context.launch(merge_interleaved, e.segments * e.segment_capacity, wg, tl(), label);
+      }
+    } else if (p.mode == Registration::segmented_lock && global > 0) {
+      for (auto& e : p.emitters) {
+        auto& dst = state(e.stream);
+        with_memory([&] {
+          ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets");
+          scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
+        });
+        merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments),
+                               plan_of(e), cl_uint(e.planned), cl_uint(first_segment_capacity(*p.spec)), counters,
+                               cl_uint(e.overflow_slot), dst.buffer, cl_uint(dst.capacity));
+        context.launch(merge_planned, std::size_t(segment_items(*p.spec, e, e.segments)), wg, tl(), label);
       }
     }
     if (p.spec->culls()) {
@@ -408,15 +462,35 @@ struct Scheduler::State {
     }
   }
 
+  // After the stage's counters are read: whether a group's or work-item's items did not
+  // all fit its segment.
+  bool segments_overflowed(const PassState& p, const EmitterState& e) const
+  {
+    if (p.mode == Registration::segmented_lock) return host_counters[e.overflow_slot] > e.segments * spill_per_group;
+    return p.mode == Registration::lock_free && host_counters[e.overflow_slot] > e.segment_capacity;
+  }
+
+  // A plan from a run with many more or fewer groups (the burst of a first step searched
+  // from the roots, say) says nothing about this one's groups: they start afresh.
+  static void forget_stale_plan(EmitterState& e, std::size_t segments)
+  {
+    if (segments + e.planned / 8 < e.planned || segments > e.planned + e.planned / 8) e.planned = e.planned_total = 0;
+  }
+
+  // Segmented lock: this execution's counts plan the next one's segments.
+  void adopt_plan(EmitterState& e)
+  {
+    std::swap(e.plan, e.offsets);
+    e.planned = e.segments;
+    e.planned_total = host_counters[state(e.stream).slot];
+  }
+
   // After the stage's counters are read: whether an output of the pass overflowed its
   // segments or its stream.
   bool overflowed(const PassState& p)
   {
-    const bool atomic = p.mode == Registration::global_atomic;
     for (const auto& e : p.emitters)
-      if ((!atomic && host_counters[e.overflow_slot] > e.segment_capacity) ||
-          host_counters[state(e.stream).slot] > state(e.stream).capacity)
-        return true;
+      if (segments_overflowed(p, e) || host_counters[state(e.stream).slot] > state(e.stream).capacity) return true;
     if (!p.spec->culls()) return false;
     const auto& target = state(p.spec->cull_target);
     return host_counters[target.slot] > target.capacity;
@@ -446,8 +520,10 @@ struct Scheduler::State {
         Redo r = Redo::none;
         for (auto& e : p->emitters) {
           auto& dst = state(e.stream);
-          if (!atomic && host_counters[e.overflow_slot] > e.segment_capacity) {
-            e.segment_capacity = grown(host_counters[e.overflow_slot]);
+          if (segments_overflowed(*p, e)) {
+            // The rerun plans from this execution's counts, so every group fits.
+            if (p->mode == Registration::segmented_lock) adopt_plan(e);
+            else e.segment_capacity = grown(host_counters[e.overflow_slot]);
             r = Redo::full;
           }
           if (host_counters[dst.slot] > dst.capacity) {
@@ -476,22 +552,13 @@ struct Scheduler::State {
     }
     for (PassState* p : stage)
       if (p->mode == Registration::segmented_lock)
-        for (auto& e : p->emitters) shrink_segments(*p, e, host_counters[e.overflow_slot]);
+        for (auto& e : p->emitters) adopt_plan(e);
     for (PassState* p : stage)
       for (StreamId s : pass_outputs(*p->spec))
         if (spec(s).variable) {
           state(s).count = host_counters[state(s).slot];
           state(s).known = true;
         }
-  }
-
-  // The next run's segments hold the busiest work-group of this one with room to
-  // spare, no more: a burst (a first step searched from the roots) must not pin its
-  // memory for good.
-  void shrink_segments(const PassState& p, EmitterState& e, std::size_t busiest)
-  {
-    const std::size_t enough = std::max(first_segment_capacity(*p.spec), grown(busiest));
-    if (e.segment_capacity > 4 * enough) e.segment_capacity = enough;
   }
 
   Kernel build_kernel(const PassSpec& spec, Registration mode, const std::string& name)
@@ -558,7 +625,8 @@ struct Scheduler::State {
       pass_total += p.stats.device_ns;
       p.stats.scratch_bytes = p.keep.bytes();
       if (p.list) p.stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
-      for (const auto& e : p.emitters) p.stats.scratch_bytes += e.items.bytes() + e.counts.bytes();
+      for (const auto& e : p.emitters)
+        p.stats.scratch_bytes += e.items.bytes() + e.counts.bytes() + e.offsets.bytes() + e.plan.bytes();
       stats.scratch_bytes += p.stats.scratch_bytes;
       stats.passes.push_back(p.stats);
     }
@@ -610,6 +678,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     p.stats.name = spec.name;
     s.passes.push_back(std::move(p));
   }
+  s.context.fill_u32(s.no_plan, 0, 0, 1);
   s.host_counters.assign(std::max<std::uint32_t>(slots, 1), 0);
   s.counters = Buffer(context, s.host_counters.size() * sizeof(std::uint32_t), "stream counters");
 }

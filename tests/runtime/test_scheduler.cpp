@@ -165,6 +165,41 @@ TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][sche
   CHECK(s.stats().scratch_bytes > 0);
 }
 
+TEST_CASE("segmented-lock segments follow the last run, and what they cannot hold spills into its group's place",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 20000, wg = ctx.work_group_size();
+  StreamGraph g;
+  auto values = g.fixed("values", 4, n);
+  auto pairs = g.variable("pairs", 8, 1);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  // Runs `v`; checks every item and the merge's order by group; returns the reruns.
+  const auto run = [&](const std::vector<std::uint32_t>& v) {
+    s.upload(values, v);
+    s.run();
+    const auto got = s.download<Pair>(pairs);
+    CHECK(sorted(got) == sorted(cstreams::test::reference(v).pairs));
+    CHECK(std::is_sorted(got.begin(), got.end(), [&](const Pair& a, const Pair& b) { return a[0] / wg < b[0] / wg; }));
+    return s.stats().passes.at(0).reruns;
+  };
+  std::uint32_t burst = 0;  // a value that emits 40 items
+  while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+
+  auto v = random_values(n, 5);
+  run(v);
+  CHECK(run(v) == 0);  // planned from the same counts
+  // One group bursts far past its plan's quarter more: the spill pool holds the rest.
+  for (std::size_t i = 3 * wg; i < 3 * wg + 12; ++i) v[i] = burst;
+  CHECK(run(v) == 0);
+  // Half the groups burst: more than the pool holds (16 items a group), so the pass runs
+  // again, planned from this run's counts.
+  for (std::size_t i = 0; i < n / 2; ++i) v[i] = burst;
+  CHECK(run(v) == 1);
+  CHECK(run(v) == 0);
+}
+
 TEST_CASE("passes update a fixed stream in place, in declaration order, before its readers", "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
