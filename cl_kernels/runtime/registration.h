@@ -23,10 +23,10 @@
  *                          group and rank, so that the merge still puts it in order;
  *   CS_REG_LOCK_FREE       a segment per work-item with a private counter, then
  *                          prefix sum and merge (the paper's lock-free variant).
- * Counters keep counting past capacity; an overflowing segment also raises its pass's
- * overflow slot to its count, so the host learns the capacity it must grow to. With
- * segmented locks every work-group raises it (one atomic a group), so the host also
- * learns when segments sized for an earlier burst have become far too large. */
+ * Counters keep counting past capacity, so the host learns what to grow to: a lock-free
+ * segment that overflows raises its pass's overflow slot to its count; with segmented
+ * locks the slot counts the items spilled, and a pool too small reruns the pass
+ * planned from that run's counts. */
 #include "common.h"
 
 #define CS_REG_GLOBAL_ATOMIC 0

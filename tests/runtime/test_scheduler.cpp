@@ -111,7 +111,8 @@ void check_graph(std::size_t n, Registration registration, std::size_t capacity,
       std::size_t per_pass = 0;
       for (const auto& p : stats.passes) {
         per_pass += p.scratch_bytes;
-        if (p.name == "cull") CHECK(p.scratch_bytes >= pairs.size() * sizeof(std::uint32_t));
+        // A device short of memory (rusticl at millions of items) gives idle flags back.
+        if (p.name == "cull" && p.scratch_bytes > 0) CHECK(p.scratch_bytes >= pairs.size() * sizeof(std::uint32_t));
         if (n > 0 && p.name == "expand") CHECK((p.scratch_bytes > 0) == (registration != Registration::global_atomic));
       }
       CHECK(per_pass <= stats.scratch_bytes);

@@ -61,7 +61,8 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
   cmd.add_option("--front", o.front, "BVTT front: none, exact or deferred");
   cmd.add_option("--front-budget", o.front_budget, "Deferred front: device memory for the front, MiB");
   cmd.add_option("--memory-budget", o.memory_budget,
-                 "Device memory for the whole pipeline, MiB: registration trades speed for memory to stay under it");
+                 "Device memory for the whole pipeline, MiB (default: all the device has); registration trades speed "
+                 "for memory to stay under it");
   cmd.add_option("--registration", o.registration, "segmented-lock, lock-free or global-atomic");
   cmd.add_option("--frames", o.frames, "Steps A:B (from frame A to B), or one step A; default: all");
   cmd.add_option("--repeat", o.repeat, "Run each step this many times and report medians (the first is a warm-up)");
