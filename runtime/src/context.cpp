@@ -265,10 +265,11 @@ std::vector<Timeline::Entry> Timeline::resolve() const
   check(clWaitForEvents(1, &last), "clWaitForEvents", "profiling " + pending_.back().label);
   for (const auto& p : pending_) {
     cl_ulong start = 0, end = 0;
-    cl_int status = clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr);
-    if (status == CL_SUCCESS)
-      status = clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr);
-    if (status != CL_SUCCESS) check(status, "clGetEventProfilingInfo", "profiling " + p.label);
+    const auto describe = [&] { return "profiling " + p.label; };
+    check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr),
+               "clGetEventProfilingInfo", describe);
+    check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr),
+               "clGetEventProfilingInfo", describe);
     entries.push_back({p.label, end > start ? end - start : 0});
   }
   return entries;

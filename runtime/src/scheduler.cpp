@@ -127,8 +127,8 @@ struct Scheduler::State {
     allocate(s, slack ? std::min(grown(needed), std::max(state(s).limit, needed)) : needed);
   }
 
-  // Passes whose registration segments hold items not merged yet: those of the stage
-  // being run and the pass being executed.
+  // Passes whose scratch may hold what is still needed: while a stage runs, its passes
+  // and the pass being executed; once its counters are read, those that overflowed.
   std::vector<const PassState*> busy;
 
   // Runs `allocate`; when the device has no memory left, gives back the scratch of
@@ -421,7 +421,7 @@ struct Scheduler::State {
           fall_back_to_global_counter(p);
         }
       }
-      // The next run tries small segments again.
+      // Lock-free: the next run tries small segments again.
       if (p.mode == Registration::global_atomic)
         for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(*p.spec);
       if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
