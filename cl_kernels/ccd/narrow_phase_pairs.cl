@@ -33,6 +33,19 @@ __kernel void cs_cubic_pairs(__global const uint2* pairs, const uint n, const ui
   CS_EMITTER_END(contacts);
 }
 
+/* Whether the filter and the bounds over the whole parameter box leave a pair open. */
+inline int cs_screen_open(const uint2 pair, const uint vertex_face, __global const real* x0, __global const real* x1,
+                          __global const uint* faces, __global const uint* edges, const uint exact_input,
+                          const real separation, const uint use_filter)
+{
+  const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
+  if (cs_filtered(&query, vertex_face, use_filter, separation)) return 0;
+  const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
+  real width, farthest, nearest[2];
+  int axis;
+  return cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &farthest, nearest, &axis);
+}
+
 /* The conservative solver's screen over every candidate stream at once (up to four,
  * the unused ones with n = 0), one work-item a pair of their concatenation: the
  * filter and the bounds over the whole parameter box settle most pairs at once; the
@@ -64,14 +77,26 @@ __kernel void cs_screen_pairs(__global const uint2* pairs0, const uint n0, const
       pair = pairs3[i - n0 - n1 - n2];
       vertex_face = vertex_face3;
     }
-    const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
-    if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
-      const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
-      real width, farthest, nearest[2];
-      int axis;
-      if (cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &farthest, nearest, &axis))
-        CS_EMIT(unresolved, (uint4)(pair, vertex_face, 0u));
-    }
+    if (cs_screen_open(pair, vertex_face, x0, x1, faces, edges, exact_input, separation, use_filter))
+      CS_EMIT(unresolved, (uint4)(pair, vertex_face, 0u));
+  }
+  CS_EMITTER_END(unresolved);
+}
+
+/* The same screen over pairs another screen left open, (a, b, vertex_face, 0) as
+ * cs_screen_pairs emits them: in double precision, the float screen (inputs rounded
+ * outward, so it settles only what is certain) goes first and settles nine pairs in
+ * ten at float's cost; this one screens the rest in double. */
+__kernel void cs_screen_open_pairs(__global const uint4* open, const uint n, __global const real* x0,
+                                   __global const real* x1, __global const uint* faces, __global const uint* edges,
+                                   const uint exact_input, const real separation, const uint use_filter,
+                                   CS_EMITTER_PARAMS(uint4, unresolved))
+{
+  CS_EMITTER_BEGIN(unresolved);
+  const uint i = get_global_id(0);
+  if (i < n) {
+    const uint4 q = open[i];
+    if (cs_screen_open(q.xy, q.z, x0, x1, faces, edges, exact_input, separation, use_filter)) CS_EMIT(unresolved, q);
   }
   CS_EMITTER_END(unresolved);
 }

@@ -102,7 +102,8 @@ void check_recall(const RealStep& s)
 }
 
 // The device pipeline with the default (conservative, single precision) solver, in
-// front modes none and exact; both must report the same contacts.
+// front modes none and exact; both must report the same contacts. Then in double
+// precision, where a float screen goes first, on devices that have it.
 void check_device_recall(const RealStep& s)
 {
   INFO("scene " << s.scene);
@@ -123,6 +124,14 @@ void check_device_recall(const RealStep& s)
     REQUIRE(detector.contacts().size() == first.size());
     for (std::size_t i = 0; i < first.size(); ++i) CHECK(detector.contacts()[i].same_features(first[i]));
   }
+  if (!cstreams::test::device().device().fp64) return;
+  DetectorOptions options;
+  options.solver.precision = Precision::double_;
+  Detector detector(cstreams::test::device(), describe(scene, 0), options);
+  detector.set_positions(0, step.x1[0]);
+  detector.detect();
+  INFO("double precision");
+  check_recall(s, step, detector.contacts());
 }
 
 }  // namespace

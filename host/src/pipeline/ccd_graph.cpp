@@ -261,9 +261,14 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   const StreamId open = g.variable("open queries", 16, sized(1024));
   std::vector<StreamId> inputs;
   for (const auto& c : in.candidates) inputs.push_back(c.first);
-  auto& test = g.pass("test candidates", {screen, "cs_screen_pairs", options})
+  const bool float_first = solver.precision == Precision::double_ && in.x0_float != StreamId{};
+  SolverOptions in_float = solver;
+  in_float.precision = Precision::single;
+  const StreamId screened = float_first ? g.variable("open queries in float", 16, sized(1024)) : open;
+  auto& test = g.pass(float_first ? "test candidates in float" : "test candidates",
+                      {screen, "cs_screen_pairs", float_first ? solver_build_options(in_float) : options})
                    .launch_over(inputs)
-                   .emit(open)
+                   .emit(screened)
                    .expect_items(0.5);
   for (std::size_t k = 0; k < screen_inputs; ++k) {
     const bool used = k < in.candidates.size();
@@ -272,7 +277,21 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
         .arg(used ? count_of(input) : value_of(cl_uint(0)))
         .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
   }
-  real(geometry_args(test, in, solver.precision), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+  if (float_first) {
+    TestInputs rounded = in;
+    rounded.x0 = in.x0_float;
+    rounded.x1 = in.x1_float;
+    real_arg(geometry_args(test, rounded, Precision::single), solver.min_separation, Precision::single)
+        .arg(value_of(cl_uint(solver.filter)));
+    auto& rest = g.pass("test candidates", {screen, "cs_screen_open_pairs", options})
+                     .launch_over(screened)
+                     .emit(open)
+                     .expect_items(1);
+    rest.arg(buffer_of(screened)).arg(count_of(screened));
+    real(geometry_args(rest, in, solver.precision), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+  } else {
+    real(geometry_args(test, in, solver.precision), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+  }
 
   const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
   contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
@@ -447,6 +466,8 @@ struct GraphBuilder {
     TestInputs in;
     in.x0 = exact_input ? s.x0_double : s.x0;
     in.x1 = exact_input ? s.x1_double : s.x1;
+    in.x0_float = s.x0;
+    in.x1_float = s.x1;
     in.faces = s.faces;
     in.edges = s.edges;
     in.candidates = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};

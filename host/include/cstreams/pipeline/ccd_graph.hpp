@@ -74,9 +74,12 @@ struct CcdStreams {
 };
 
 // What the elementary tests read: positions (double ones in double precision),
-// topology, and the candidate streams with their kinds.
+// topology, and the candidate streams with their kinds. In double precision, float
+// positions rounded to nearest (where there are some) let the conservative solver
+// screen in float first.
 struct TestInputs {
   runtime::StreamId x0, x1, faces, edges;
+  runtime::StreamId x0_float, x1_float;
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
 };
 
