@@ -332,6 +332,7 @@ struct Scheduler::State {
     ListState& l = *p.list;
     const std::string& label = p.spec->name;
     const std::size_t wg = context.work_group_size();
+    const std::size_t round_group = w.round_group ? std::min(w.round_group, wg) : wg;
     with_memory([&] { ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * w.state_bytes, "work list state"); });
     if (n == 0) return;
     if (l.capacity < n) allocate_lists(l, grown(n), w.item_bytes);
@@ -362,7 +363,7 @@ struct Scheduler::State {
           l.round.set_arg(r++, cl_uint(round));
           l.round.set_arg(r++, cl_uint(l.capacity));
           const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
-          context.launch(l.round, round_up(items, wg), wg, tl(), label);
+          context.launch(l.round, round_up(items, round_group), round_group, tl(), label);
           ++p.stats.launches;
         }
         context.read(l.counts, counts, sizeof counts, 0, tl());

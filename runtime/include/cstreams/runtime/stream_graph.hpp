@@ -69,6 +69,10 @@ struct Worklist {
   std::size_t item_bytes = 0;    // I
   std::size_t state_bytes = 0;   // S, per input
   std::size_t round_items = 0;   // work-items a round launches
+  // Work-items a group of a round launch, at most the context's (0: the context's).
+  // Groups share nothing but an append, so a round kernel heavy in registers can run
+  // in small groups, as many at once as the device's registers hold.
+  std::size_t round_group = 0;
 };
 
 // One kernel over the items of a stream, and what it reads and writes.
