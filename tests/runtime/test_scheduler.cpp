@@ -241,6 +241,8 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
   Context limited(filter_from_environment(), 0, 4096);
   limited.programs().add_sources(test_kernel_sources());
   const bool bounded = GENERATE(false, true);
+  // Rounds in the context's groups, and in small groups of their own.
+  const std::size_t round_group = GENERATE(std::size_t(0), std::size_t(32));
   auto& ctx = bounded ? limited : cstreams::test::device();
   for (const std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(3001)}) {
     StreamGraph g;
@@ -248,7 +250,7 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
     const auto counted = g.variable("counted", 8, 16);
     g.pass("tree", {program, "test_tree_finish"})
         .launch_over(values)
-        .refine({"test_tree_seed", "test_tree_round", 8, 4, 2 * ctx.work_group_size()})
+        .refine({"test_tree_seed", "test_tree_round", 8, 4, 2 * ctx.work_group_size(), round_group})
         .emit(counted)
         .arg(buffer_of(values))
         .arg(count_of(values));
@@ -265,7 +267,7 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
     }
     s.upload(values, v);
     for (int frame = 0; frame < 2; ++frame) {
-      INFO("n = " << n << ", frame " << frame << (bounded ? ", bounded loops" : ""));
+      INFO("n = " << n << ", frame " << frame << (bounded ? ", bounded loops" : "") << ", round group " << round_group);
       s.run();
       CHECK(sorted(s.download<Pair>(counted)) == expected);
       const PassStats& tree = s.stats().passes.at(0);
