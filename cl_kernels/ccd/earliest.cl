@@ -35,6 +35,8 @@ __kernel void cs_earliest_toi(__global const uint4* contacts, const uint n, cons
 #endif
   const uint a = vertex_object[vertex_face ? c.x : edges[2 * c.x]];
   const uint b = vertex_object[vertex_face ? faces[3 * c.y] : edges[2 * c.y]];
-  atomic_min(&earliest[a], as_uint(t));
-  atomic_min(&earliest[b], as_uint(t));
+  /* Objects are few and contacts many, so atomics on one object queue up; a minimum
+   * only falls, so a time no earlier than what is already there needs none. */
+  if (as_uint(t) < earliest[a]) atomic_min(&earliest[a], as_uint(t));
+  if (as_uint(t) < earliest[b]) atomic_min(&earliest[b], as_uint(t));
 }
