@@ -27,7 +27,9 @@ struct StreamState {
 
 struct EmitterState {
   StreamId stream;
-  Buffer items;   // registration segments
+  Buffer items;   // registration segments, from the scheduler's idle ones; held until the stage's counters are read
+  std::size_t needed = 0;         // bytes of segments the last execution asked for
+  std::size_t segment_bytes = 0;  // of the segments this run's execution held
   Buffer counts;  // one count per segment
   std::size_t segments = 0;
   std::size_t segment_capacity = 0;  // lock-free: items a work-item's segment holds
@@ -131,6 +133,103 @@ struct Scheduler::State {
   // and the pass being executed; once its counters are read, those that overflowed.
   std::vector<const PassState*> busy;
 
+  // Registration segments hold a pass's items only until its stage's counters are read;
+  // then they come here, for the passes of later stages (the front update's and
+  // decompose's, say, never hold items at once).
+  std::vector<Buffer> idle_segments;
+  std::vector<std::vector<std::size_t>> stage_needs;  // of this run, each stage's emitters'
+
+  // Segments of at least `bytes` for e: the smallest idle buffer that serves them, or a
+  // new one. What a buffer holds beyond the need, the rest of the stage cannot have:
+  // unless that is little, it is taken only where the device has room for it twice over.
+  void take_segments(EmitterState& e, std::size_t bytes)
+  {
+    auto fits = idle_segments.end();
+    for (auto it = idle_segments.begin(); it != idle_segments.end(); ++it)
+      if (it->bytes() >= bytes && (fits == idle_segments.end() || it->bytes() < fits->bytes())) fits = it;
+    if (fits != idle_segments.end()) {
+      const std::size_t excess = fits->bytes() - bytes;
+      const std::size_t limit = context.memory_limit(), room = limit - std::min(limit, context.memory_in_use());
+      if (excess <= bytes / 8 || 2 * excess <= room) {
+        e.items = std::move(*fits);
+        idle_segments.erase(fits);
+        return;
+      }
+    }
+    with_memory([&] { e.items = Buffer(context, std::max<std::size_t>(bytes, 1), "registration segments"); });
+  }
+
+  void give_back_segments(EmitterState& e)
+  {
+    if (e.items) idle_segments.push_back(std::move(e.items));
+  }
+
+  // After a stage's counters are read and nothing of it overflowed.
+  void give_back_segments(const std::vector<PassState*>& stage)
+  {
+    std::vector<std::size_t> needs;
+    for (PassState* p : stage)
+      for (auto& e : p->emitters)
+        if (e.items) {
+          needs.push_back(e.needed);
+          give_back_segments(e);
+        }
+    if (!needs.empty()) stage_needs.push_back(std::move(needs));
+  }
+
+  // Needs of this run's stages that buffers of these sizes would leave unserved, each
+  // stage's largest need first taking the smallest buffer that holds it; `served`, if
+  // given, gets the largest need each buffer served.
+  std::size_t unserved(const std::vector<std::size_t>& sizes, std::vector<std::size_t>* served = nullptr) const
+  {
+    std::size_t count = 0;
+    if (served) served->assign(sizes.size(), 0);
+    for (const auto& needs : stage_needs) {
+      std::vector<bool> taken(sizes.size(), false);
+      for (const std::size_t need : needs) {
+        std::size_t best = sizes.size();
+        for (std::size_t k = 0; k < sizes.size(); ++k)
+          if (!taken[k] && sizes[k] >= need && (best == sizes.size() || sizes[k] < sizes[best])) best = k;
+        if (best == sizes.size()) {
+          ++count;
+          continue;
+        }
+        taken[best] = true;
+        if (served) (*served)[best] = std::max((*served)[best], need);
+      }
+    }
+    return count;
+  }
+
+  // At the end of a run: buffers go back, smallest first, while the others would serve
+  // this run's stages as well, so that the pool settles at what the stages need, each
+  // buffer shared by as many as it can serve. Then those that serve less than half of
+  // themselves (a burst that has passed: a first step searched from the roots, say) go
+  // back too, and the passes they served take buffers of their size next run.
+  void keep_needed_segments()
+  {
+    for (auto& needs : stage_needs) std::sort(needs.begin(), needs.end(), std::greater<>());
+    std::sort(idle_segments.begin(), idle_segments.end(),
+              [](const Buffer& a, const Buffer& b) { return a.bytes() < b.bytes(); });
+    const auto sizes_of = [](const std::vector<Buffer>& buffers) {
+      std::vector<std::size_t> sizes;
+      for (const auto& b : buffers) sizes.push_back(b.bytes());
+      return sizes;
+    };
+    const std::size_t with_all = unserved(sizes_of(idle_segments));
+    std::vector<Buffer> kept;
+    for (std::size_t k = 0; k < idle_segments.size(); ++k) {
+      std::vector<std::size_t> without = sizes_of(kept);
+      for (std::size_t j = k + 1; j < idle_segments.size(); ++j) without.push_back(idle_segments[j].bytes());
+      if (unserved(without) > with_all) kept.push_back(std::move(idle_segments[k]));
+    }
+    std::vector<std::size_t> served;
+    unserved(sizes_of(kept), &served);
+    idle_segments.clear();
+    for (std::size_t k = 0; k < kept.size(); ++k)
+      if (kept[k].bytes() <= 2 * served[k] + (1u << 20)) idle_segments.push_back(std::move(kept[k]));
+  }
+
   // Runs `allocate`; when the device has no memory left, gives back the scratch of
   // every pass that holds nothing in it now (done already, or not run yet this run; it
   // is allocated again when the pass next runs) and tries once more.
@@ -156,6 +255,8 @@ struct Scheduler::State {
         freed = true;
       }
     };
+    for (auto& idle : idle_segments) release(idle);
+    idle_segments.clear();
     for (auto& other : passes) {
       if (std::find(busy.begin(), busy.end(), &other) != busy.end()) continue;
       for (auto& e : other.emitters) release(e.items);
@@ -292,7 +393,10 @@ struct Scheduler::State {
   // memory goes back.
   void fall_back_to_global_counter(PassState& p)
   {
-    for (auto& e : p.emitters) e.items = Buffer();
+    for (auto& e : p.emitters) {
+      e.items = Buffer();
+      e.segment_bytes = 0;
+    }
     if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
     p.mode = Registration::global_atomic;
     p.atomic_this_run = true;
@@ -302,11 +406,12 @@ struct Scheduler::State {
   {
     e.segments = segment_count(global);
     const std::size_t bytes = std::size_t(segment_items(pass, e, e.segments)) * spec(e.stream).element_bytes;
-    // Segments sized for an earlier burst (or for groups without a plan) give their
-    // memory back once it has passed.
-    // Growing ones too: their contents are written anew, so the device need not hold both.
-    if (e.items.bytes() > 2 * bytes + (1u << 20) || e.items.bytes() < bytes) e.items = Buffer();
-    with_memory([&] { ensure_capacity(context, e.items, bytes, "registration segments"); });
+    // Segments still held from this run's overflowing execution are written anew: kept
+    // while they fit.
+    if (e.items.bytes() < bytes) give_back_segments(e);
+    if (!e.items) take_segments(e, bytes);
+    e.needed = bytes;
+    e.segment_bytes = e.items.bytes();
     // Segmented lock: each spilled item's group and rank follow the counts.
     const std::size_t words = options.registration == Registration::segmented_lock ? 1 + 2 * spill_per_group : 1;
     with_memory([&] { ensure_capacity(context, e.counts, e.segments * words * sizeof(cl_uint), "registration counts"); });
@@ -554,6 +659,7 @@ struct Scheduler::State {
     for (PassState* p : stage)
       if (p->mode == Registration::segmented_lock)
         for (auto& e : p->emitters) adopt_plan(e);
+    give_back_segments(stage);
     for (PassState* p : stage)
       for (StreamId s : pass_outputs(*p->spec))
         if (spec(s).variable) {
@@ -584,7 +690,9 @@ struct Scheduler::State {
       p.stats = PassStats{p.spec->name};
       p.atomic_this_run = false;
       if (p.list) p.list->settled = false;
+      for (auto& e : p.emitters) e.segment_bytes = 0;
     }
+    stage_needs.clear();
     for (const auto& p : passes)
       for (StreamId s : pass_outputs(*p.spec))
         if (spec(s).variable) state(s).known = false;
@@ -604,6 +712,7 @@ struct Scheduler::State {
     }
     flush(stage);
     busy.clear();
+    keep_needed_segments();
     collect_stats();
   }
 
@@ -620,17 +729,24 @@ struct Scheduler::State {
     std::map<std::string, std::uint64_t> by_label;
     for (const auto& e : timeline.resolve()) by_label[e.label] += e.nanoseconds;
     std::uint64_t pass_total = 0;
+    // Segments are shared between stages: the run's total counts each buffer once.
     stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
+    for (const auto& idle : idle_segments) stats.segment_bytes += idle.bytes();
     for (auto& p : passes) {
       p.stats.device_ns = by_label[p.spec->name];
       pass_total += p.stats.device_ns;
       p.stats.scratch_bytes = p.keep.bytes();
       if (p.list) p.stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
-      for (const auto& e : p.emitters)
-        p.stats.scratch_bytes += e.items.bytes() + e.counts.bytes() + e.offsets.bytes() + e.plan.bytes();
+      for (const auto& e : p.emitters) {
+        p.stats.scratch_bytes += e.counts.bytes() + e.offsets.bytes() + e.plan.bytes();
+        p.stats.segment_bytes += e.segment_bytes;
+        stats.segment_bytes += e.items.bytes();  // held still: the run stopped before its stage's end
+      }
       stats.scratch_bytes += p.stats.scratch_bytes;
+      p.stats.scratch_bytes += p.stats.segment_bytes;
       stats.passes.push_back(p.stats);
     }
+    stats.scratch_bytes += stats.segment_bytes;
     std::uint64_t all = 0;
     for (const auto& [label, ns] : by_label) all += ns;
     stats.scheduler_ns = all - pass_total;

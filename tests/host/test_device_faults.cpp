@@ -117,10 +117,12 @@ TEST_CASE("a step that runs short of memory gives back registration segments and
   for (const auto& s : reference.stats().run.streams) streams += s.bytes;
   REQUIRE(peak > streams);
 
-  // Between what the streams alone hold and what segments add to them at the peak:
-  // either the step fits by giving segments back, or it fails naming the allocation.
+  // Between what the streams alone hold and what scratch adds to them at the peak:
+  // either the step fits by giving idle scratch back, or it fails naming the
+  // allocation. Segments are shared between stages, so the peak leaves little to give
+  // back: only limits near it fit.
   std::size_t fitted = 0;
-  for (double share : {0.25, 0.5, 0.75}) {
+  for (double share : {0.25, 0.5, 0.75, 0.9, 0.95}) {
     runtime::Context context(filter_from_environment());
     Detector detector(context, describe(scene, 0), tiny);
     const std::size_t limit = streams + std::size_t(double(peak - streams) * share);

@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <random>
 
 const cstreams::runtime::SourceSet& test_kernel_sources();
@@ -108,14 +109,14 @@ void check_graph(std::size_t n, Registration registration, std::size_t capacity,
       for (const auto& p : stats.passes) CHECK(p.reruns == 0);
       CHECK(stats.readbacks == 3);  // one per stage: after expand, after cull, after split
       // Scratch is reported per pass: registration segments where there are any, cull flags.
-      std::size_t per_pass = 0;
       for (const auto& p : stats.passes) {
-        per_pass += p.scratch_bytes;
         // A device short of memory (rusticl at millions of items) gives idle flags back.
         if (p.name == "cull" && p.scratch_bytes > 0) CHECK(p.scratch_bytes >= pairs.size() * sizeof(std::uint32_t));
         if (n > 0 && p.name == "expand") CHECK((p.scratch_bytes > 0) == (registration != Registration::global_atomic));
       }
-      CHECK(per_pass <= stats.scratch_bytes);
+      // Segments go from one stage's passes to a later one's: the run counts each buffer
+      // once, and what it keeps for the next.
+      CHECK(stats.segment_bytes <= stats.scratch_bytes);
     }
   }
 }
@@ -199,6 +200,55 @@ TEST_CASE("segmented-lock segments follow the last run, and what they cannot hol
   for (std::size_t i = 0; i < n / 2; ++i) v[i] = burst;
   CHECK(run(v) == 1);
   CHECK(run(v) == 0);
+}
+
+TEST_CASE("a later stage's pass registers into the segments an earlier stage's pass held", "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  const std::size_t n = 20000;
+  const auto values = g.fixed("values", 4, n), none = g.fixed("none", 4, 0);
+  const auto pairs = g.variable("pairs", 8, 16), words = g.variable("words", 4, 16);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  // The pairs' first words, one per pair: half the bytes, in the next stage.
+  g.pass("copy", {program, "test_concatenate"})
+      .launch_over({pairs, none})
+      .emit(words)
+      .arg(buffer_of(pairs))
+      .arg(count_of(pairs))
+      .arg(buffer_of(none))
+      .arg(count_of(none));
+  // Segmented lock, the default: segments follow what each group emitted, so a burst of
+  // every value asks for several times the usual segments. (Lock-free ones hold the
+  // busiest work-item's items for every work-item, a burst's size already.)
+  {
+    Scheduler s(ctx, g, {Registration::segmented_lock, true});
+    s.upload(values, random_values(n, 41));
+    for (int frame = 0; frame < 3; ++frame) {
+      s.run();
+      const auto p = s.download<Pair>(pairs);
+      std::vector<std::uint32_t> expected(p.size());
+      std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
+      CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
+    }
+    const auto& stats = s.stats();
+    const std::size_t expand = stats.passes.at(0).segment_bytes, copy = stats.passes.at(1).segment_bytes;
+    CHECK(copy > 0);
+    CHECK(copy <= expand);  // the same buffer, taken again
+    CHECK(stats.segment_bytes == expand);
+
+    // A burst (every value emits 40 pairs) takes larger segments; once it has passed,
+    // they go back.
+    std::uint32_t burst = 0;
+    while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+    s.upload(values, std::vector<std::uint32_t>(n, burst));
+    s.run();
+    CHECK(s.stats().segment_bytes > 4 * expand);
+    s.upload(values, random_values(n, 41));
+    s.run();
+    s.run();
+    CHECK(s.stats().segment_bytes <= 2 * expand + (1u << 20));
+  }
 }
 
 TEST_CASE("passes update a fixed stream in place, in declaration order, before its readers", "[runtime][scheduler][quick]")

@@ -21,7 +21,9 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
   nlohmann::json passes = nlohmann::json::object(), streams = nlohmann::json::object();
   for (const auto& p : s.run.passes) {
     auto& pass = passes[p.name] = {
-        {"ms", p.device_ns * 1e-6}, {"launches", p.launches}, {"reruns", p.reruns}, {"scratch_bytes", p.scratch_bytes}};
+        {"ms", p.device_ns * 1e-6},         {"launches", p.launches},
+        {"reruns", p.reruns},               {"scratch_bytes", p.scratch_bytes},
+        {"segment_bytes", p.segment_bytes}};
     if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
   }
   for (const auto& st : s.run.streams)
@@ -40,6 +42,7 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
           {"front_retries", s.front_retries},
           {"device_bytes", s.device_bytes()},
           {"scratch_bytes", s.run.scratch_bytes},
+          {"segment_bytes", s.run.segment_bytes},
           {"passes", passes},
           {"streams", streams}};
 }

@@ -28,7 +28,10 @@ struct PassStats {
   unsigned rounds = 0;
   std::uint64_t list_items = 0;
   std::size_t widest_list = 0;
-  std::size_t scratch_bytes = 0;  // the pass's own: registration segments, cull flags, work lists
+  // The pass's own: registration segments (those it held this run, shared with passes
+  // of other stages), cull flags, work lists.
+  std::size_t scratch_bytes = 0;
+  std::size_t segment_bytes = 0;  // the registration segments alone
 };
 
 struct StreamStats {
@@ -44,7 +47,8 @@ struct RunStats {
   std::vector<StreamStats> streams; // in declaration order
   std::uint64_t scheduler_ns = 0;   // counter clears and readbacks
   unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
-  std::size_t scratch_bytes = 0;    // segments, flags, offsets and scan levels
+  std::size_t scratch_bytes = 0;    // segments (each buffer once), flags, offsets and scan levels
+  std::size_t segment_bytes = 0;    // the registration segments alone, each buffer once
 };
 
 // Runs a StreamGraph on one device. It builds every kernel at construction, owns the
