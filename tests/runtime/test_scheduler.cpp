@@ -251,6 +251,55 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   }
 }
 
+TEST_CASE("under any memory limit a stage either fits, giving back scratch, or fails naming the allocation",
+          "[runtime][scheduler][quick]")
+{
+  // One stage: the odd values are culled (flags), then the expansion emits (segments);
+  // short of memory, idle scratch goes back and a pass whose segments do not fit
+  // registers through the global counter. (Not every limit above one that fits does:
+  // where the segments just fit, the flags of a rerun may not.)
+  const std::size_t n = 20000;
+  StreamGraph g;
+  const auto values = g.fixed("values", 4, n);
+  const auto pairs = g.variable("pairs", 8, 16), odd = g.variable("odd values", 4, 16);
+  g.pass("odd", {program, "test_flag_odd"}).launch_over(values).cull(values, odd).arg(buffer_of(values)).arg(count_of(values));
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  const auto v = random_values(n, 7);
+  std::vector<std::uint32_t> odd_values;
+  for (const auto x : v)
+    if (x & 1u) odd_values.push_back(x);
+
+  Scheduler reference(cstreams::test::device(), g, {Registration::segmented_lock, true});
+  reference.upload(values, v);
+  reference.run();
+  const auto expected = sorted(reference.download<Pair>(pairs));
+  std::size_t streams = 0;
+  for (const auto& stream : reference.stats().streams) streams += stream.bytes;
+  const std::size_t total = streams + reference.stats().scratch_bytes;
+
+  unsigned fitted = 0;
+  for (std::size_t limit = streams; limit <= total; limit += (total - streams) / 16) {
+    INFO("limit " << limit << " of " << total << ", streams " << streams);
+    Context limited(filter_from_environment());
+    limited.programs().add_sources(test_kernel_sources());
+    limited.set_memory_limit(limit);
+    Scheduler s(limited, g, {Registration::segmented_lock, true});
+    s.upload(values, v);
+    try {
+      for (int frame = 0; frame < 2; ++frame) {
+        s.run();
+        CHECK(sorted(s.download<Pair>(pairs)) == expected);
+        CHECK(s.download<std::uint32_t>(odd) == odd_values);
+      }
+      ++fitted;
+    } catch (const DeviceMemoryExhausted& e) {
+      CHECK_THAT(e.what(), Catch::Contains("allocating"));
+      CHECK(limit < total);
+    }
+  }
+  CHECK(fitted > 0);
+}
+
 TEST_CASE("passes update a fixed stream in place, in declaration order, before its readers", "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
