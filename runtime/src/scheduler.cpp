@@ -139,7 +139,7 @@ struct Scheduler::State {
   std::vector<Buffer> idle_segments;
   std::vector<std::vector<std::size_t>> stage_needs;  // of this run, each stage's emitters'
 
-  // Segments of at least `bytes` for e: the smallest idle buffer that serves them, or a
+  // Segments of at least `bytes` for e: the smallest idle buffer that holds them, or a
   // new one. What a buffer holds beyond the need, the rest of the stage cannot have:
   // unless that is little, it is taken only where the device has room for it twice over.
   void take_segments(EmitterState& e, std::size_t bytes)
@@ -729,7 +729,8 @@ struct Scheduler::State {
     std::map<std::string, std::uint64_t> by_label;
     for (const auto& e : timeline.resolve()) by_label[e.label] += e.nanoseconds;
     std::uint64_t pass_total = 0;
-    // Segments are shared between stages: the run's total counts each buffer once.
+    // Segments are shared between stages: the run's total counts each buffer once, and
+    // once the run is over they are all idle.
     stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
     for (const auto& idle : idle_segments) stats.segment_bytes += idle.bytes();
     for (auto& p : passes) {
@@ -740,7 +741,6 @@ struct Scheduler::State {
       for (const auto& e : p.emitters) {
         p.stats.scratch_bytes += e.counts.bytes() + e.offsets.bytes() + e.plan.bytes();
         p.stats.segment_bytes += e.segment_bytes;
-        stats.segment_bytes += e.items.bytes();  // held still: the run stopped before its stage's end
       }
       stats.scratch_bytes += p.stats.scratch_bytes;
       p.stats.scratch_bytes += p.stats.segment_bytes;
