@@ -33,17 +33,24 @@ __kernel void cs_cubic_pairs(__global const uint2* pairs, const uint n, const ui
   CS_EMITTER_END(contacts);
 }
 
-/* Whether the filter and the bounds over the whole parameter box leave a pair open. */
+/* Whether the bounds over the whole parameter box and the filter leave a pair open.
+ * The bounds go first: they settle most pairs, the filter is as costly and only runs
+ * on what they leave. Either way the pair is open only where neither settles it. */
 inline int cs_screen_open(const uint2 pair, const uint vertex_face, __global const real* x0, __global const real* x1,
                           __global const uint* faces, __global const uint* edges, const uint exact_input,
                           const real separation, const uint use_filter)
 {
+  {
+    const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
+    const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
+    real width, farthest, nearest[2];
+    int axis;
+    if (!cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &farthest, nearest, &axis)) return 0;
+  }
+  if (!use_filter || separation != 0) return 1;
+  /* Loaded again rather than kept: the bounds need every register they can get. */
   const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
-  if (cs_filtered(&query, vertex_face, use_filter, separation)) return 0;
-  const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
-  real width, farthest, nearest[2];
-  int axis;
-  return cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &farthest, nearest, &axis);
+  return !cs_filtered(&query, vertex_face, use_filter, separation);
 }
 
 /* The conservative solver's screen over every candidate stream at once (up to four,
