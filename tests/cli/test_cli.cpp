@@ -170,6 +170,23 @@ TEST_CASE("compare runs one scene on several devices and finds their contacts id
   }
 }
 
+TEST_CASE("run --no-profile reports the same contacts, its wall time and no device times", "[cli][quick]")
+{
+  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-no-profile";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
+  execute({"run", a, b, "--out", (dir / "timed.csv").string()});
+  execute({"run", a, b, "--no-profile", "--out", (dir / "untimed.csv").string(), "--json",
+           (dir / "untimed.json").string()});
+  std::ifstream timed(dir / "timed.csv"), untimed(dir / "untimed.csv");
+  CHECK(std::string(std::istreambuf_iterator<char>(timed), {}) == std::string(std::istreambuf_iterator<char>(untimed), {}));
+  const auto report = nlohmann::json::parse(std::ifstream(dir / "untimed.json"));
+  CHECK(report["median_device_ms"].is_null());
+  CHECK(report["median_host_ms"].get<double>() > 0);
+  CHECK(report["steps"][0]["passes"]["front update"]["ms"].is_null());
+}
+
 TEST_CASE("run --earliest-only counts the same contacts and gives the earliest time without them", "[cli][quick]")
 {
   const fs::path dir = fs::temp_directory_path() / "cstreams-cli-earliest";

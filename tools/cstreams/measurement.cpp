@@ -16,14 +16,16 @@ namespace cstreams::cli {
 
 namespace {
 
-nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_ms)
+// timed: whether the passes' device times are known (null in JSON where not).
+nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_ms, bool timed)
 {
   nlohmann::json passes = nlohmann::json::object(), streams = nlohmann::json::object();
   for (const auto& p : s.run.passes) {
-    auto& pass = passes[p.name] = {
-        {"ms", p.device_ns * 1e-6},         {"launches", p.launches},
-        {"reruns", p.reruns},               {"scratch_bytes", p.scratch_bytes},
-        {"segment_bytes", p.segment_bytes}};
+    auto& pass = passes[p.name] = {{"ms", timed ? nlohmann::json(p.device_ns * 1e-6) : nlohmann::json()},
+                                   {"launches", p.launches},
+                                   {"reruns", p.reruns},
+                                   {"scratch_bytes", p.scratch_bytes},
+                                   {"segment_bytes", p.segment_bytes}};
     if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
   }
   for (const auto& st : s.run.streams)
@@ -69,6 +71,8 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
   cmd.add_option("--registration", o.registration, "segmented-lock, lock-free or global-atomic");
   cmd.add_option("--frames", o.frames, "Steps A:B (from frame A to B), or one step A; default: all");
   cmd.add_option("--repeat", o.repeat, "Run each step this many times and report medians (the first is a warm-up)");
+  cmd.add_flag("--no-profile", o.no_profile,
+               "Record no kernel timings: device times are unknown, wall times leave out what timing costs the host");
 }
 
 DetectorOptions detector_options(const MeasureOptions& o)
@@ -82,6 +86,7 @@ DetectorOptions detector_options(const MeasureOptions& o)
   options.front = parse_front_mode(o.front);
   options.front_budget_mb = o.front_budget;
   options.registration = runtime::parse_registration(o.registration);
+  options.profile = !o.no_profile;
   return options;
 }
 
@@ -134,8 +139,9 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   if (o.memory_budget > 0) context.set_memory_limit(std::size_t(o.memory_budget * (1 << 20)));
   Detector detector(context, describe(scene, first), detector_options(o));
   const bool terminal = ::isatty(STDERR_FILENO);
-  // A device without a kernel timer reports times as unknown (NaN; null in JSON).
-  const bool timed = context.device().profiling_timer;
+  // A device without a kernel timer, or a run that records none, reports times as
+  // unknown (NaN; null in JSON).
+  const bool timed = context.device().profiling_timer && !o.no_profile;
   const double unknown = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t frame = first; frame < last; ++frame) {
     const Step step = load_step(scene, frame);
@@ -162,7 +168,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     const double host_ms = median(host), device_ms = median(device);
     m.host_ms.push_back(host_ms);
     m.device_ms.push_back(device_ms);
-    m.steps.push_back(step_json(frame, stats, host_ms));
+    m.steps.push_back(step_json(frame, stats, host_ms, timed));
     m.steps.back()["device_ms"] = device_ms;
     m.contact_count += stats.contacts;
     m.peak_bytes = std::max(m.peak_bytes, stats.device_bytes());

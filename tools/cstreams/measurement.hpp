@@ -35,6 +35,9 @@ struct MeasureOptions {
   unsigned repeat = 1;
   // Read back only the earliest time of impact per object, not the contacts.
   bool earliest_only = false;
+  // Record no OpenCL profiling events: device times unknown, and the wall time without
+  // what the events cost the host.
+  bool no_profile = false;
 };
 
 // Registers the scene and the pipeline's options on a subcommand.
