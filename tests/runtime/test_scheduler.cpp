@@ -221,34 +221,32 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   // Segmented lock, the default: segments follow what each group emitted, so a burst of
   // every value asks for several times the usual segments. (Lock-free ones hold the
   // busiest work-item's items for every work-item, a burst's size already.)
-  {
-    Scheduler s(ctx, g, {Registration::segmented_lock, true});
-    s.upload(values, random_values(n, 41));
-    for (int frame = 0; frame < 3; ++frame) {
-      s.run();
-      const auto p = s.download<Pair>(pairs);
-      std::vector<std::uint32_t> expected(p.size());
-      std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
-      CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
-    }
-    const auto& stats = s.stats();
-    const std::size_t expand = stats.passes.at(0).segment_bytes, copy = stats.passes.at(1).segment_bytes;
-    CHECK(copy > 0);
-    CHECK(copy <= expand);  // the same buffer, taken again
-    CHECK(stats.segment_bytes == expand);
-
-    // A burst (every value emits 40 pairs) takes larger segments; once it has passed,
-    // they go back.
-    std::uint32_t burst = 0;
-    while (cstreams::test::test_emit_count(burst) != 40) ++burst;
-    s.upload(values, std::vector<std::uint32_t>(n, burst));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  s.upload(values, random_values(n, 41));
+  for (int frame = 0; frame < 3; ++frame) {
     s.run();
-    CHECK(s.stats().segment_bytes > 4 * expand);
-    s.upload(values, random_values(n, 41));
-    s.run();
-    s.run();
-    CHECK(s.stats().segment_bytes <= 2 * expand + (1u << 20));
+    const auto p = s.download<Pair>(pairs);
+    std::vector<std::uint32_t> expected(p.size());
+    std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
+    CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
   }
+  const auto& stats = s.stats();
+  const std::size_t expand = stats.passes.at(0).segment_bytes, copy = stats.passes.at(1).segment_bytes;
+  CHECK(copy > 0);
+  CHECK(copy <= expand);  // the same buffer, taken again
+  CHECK(stats.segment_bytes == expand);
+
+  // A burst (every value emits 40 pairs) takes larger segments; once it has passed,
+  // they go back.
+  std::uint32_t burst = 0;
+  while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+  s.upload(values, std::vector<std::uint32_t>(n, burst));
+  s.run();
+  CHECK(s.stats().segment_bytes > 4 * expand);
+  s.upload(values, random_values(n, 41));
+  s.run();
+  s.run();
+  CHECK(s.stats().segment_bytes <= 2 * expand + (1u << 20));
 }
 
 TEST_CASE("under any memory limit a stage either fits, giving back scratch, or fails naming the allocation",
