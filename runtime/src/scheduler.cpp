@@ -75,6 +75,17 @@ struct PassState {
 // Slack on growth, so that a count that creeps up frame by frame does not rerun each time.
 std::size_t grown(std::size_t needed) { return needed + needed / 8 + 16; }
 
+// The smallest of `items` that holds `need` bytes (`bytes_of` an item), or end(): the
+// one rule by which passes take idle segments and by which the scheduler works out which
+// of them to keep.
+template <class Items, class Bytes> auto smallest_holding(Items& items, std::size_t need, Bytes bytes_of)
+{
+  auto best = items.end();
+  for (auto it = items.begin(); it != items.end(); ++it)
+    if (bytes_of(*it) >= need && (best == items.end() || bytes_of(*it) < bytes_of(*best))) best = it;
+  return best;
+}
+
 std::string registration_define(Registration r)
 {
   return "-DCS_REGISTRATION=" + std::to_string(int(r));
@@ -144,9 +155,7 @@ struct Scheduler::State {
   // unless that is little, it is taken only where the device has room for it twice over.
   void take_segments(EmitterState& e, std::size_t bytes)
   {
-    auto fits = idle_segments.end();
-    for (auto it = idle_segments.begin(); it != idle_segments.end(); ++it)
-      if (it->bytes() >= bytes && (fits == idle_segments.end() || it->bytes() < fits->bytes())) fits = it;
+    const auto fits = smallest_holding(idle_segments, bytes, [](const Buffer& b) { return b.bytes(); });
     if (fits != idle_segments.end()) {
       const std::size_t excess = fits->bytes() - bytes;
       const std::size_t limit = context.memory_limit(), room = limit - std::min(limit, context.memory_in_use());
@@ -185,17 +194,16 @@ struct Scheduler::State {
     std::size_t count = 0;
     if (served) served->assign(sizes.size(), 0);
     for (const auto& needs : stage_needs) {
-      std::vector<bool> taken(sizes.size(), false);
+      std::vector<std::size_t> free(sizes.size());  // indices into sizes
+      for (std::size_t k = 0; k < free.size(); ++k) free[k] = k;
       for (const std::size_t need : needs) {
-        std::size_t best = sizes.size();
-        for (std::size_t k = 0; k < sizes.size(); ++k)
-          if (!taken[k] && sizes[k] >= need && (best == sizes.size() || sizes[k] < sizes[best])) best = k;
-        if (best == sizes.size()) {
+        const auto best = smallest_holding(free, need, [&](std::size_t k) { return sizes[k]; });
+        if (best == free.end()) {
           ++count;
           continue;
         }
-        taken[best] = true;
-        if (served) (*served)[best] = std::max((*served)[best], need);
+        if (served) (*served)[*best] = std::max((*served)[*best], need);
+        free.erase(best);
       }
     }
     return count;
