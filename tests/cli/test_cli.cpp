@@ -50,6 +50,15 @@ std::string funnel_frame(const char* name)
   return cstreams::test::benchmark_path(std::string("scalable-ccd-sample/cloth-funnel/frames/") + name);
 }
 
+// An empty folder of that name in the temporary directory.
+fs::path fresh_dir(const char* name)
+{
+  const fs::path dir = fs::temp_directory_path() / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
 // Parses and runs a command line as the program would.
 void execute(std::vector<std::string> args)
 {
@@ -109,9 +118,7 @@ TEST_CASE("numeric flags out of range are refused before any work, naming the fl
 
 TEST_CASE("output paths are checked when the command line is read", "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-outputs";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-outputs");
   const std::string mesh = funnel_frame("227.ply");
   bool ran = true;
   CHECK(parse({"run", mesh, "--out", "/nonexistent/dir/c.csv"}, &ran) ==
@@ -127,9 +134,7 @@ TEST_CASE("output paths are checked when the command line is read", "[cli][quick
 
 TEST_CASE("a run writes its contacts and statistics whole", "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-run";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-run");
   auto cli = cstreams::cli::make_command_line();
   std::vector<std::string> args{"cstreams", "run", funnel_frame("227.ply"), funnel_frame("228.ply"),
                                 "--out", (dir / "c.csv").string(), "--json", (dir / "s.json").string()};
@@ -147,9 +152,7 @@ TEST_CASE("a run writes its contacts and statistics whole", "[cli][quick]")
 
 TEST_CASE("compare runs one scene on several devices and finds their contacts identical", "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-compare";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-compare");
   // The device the tests run on, named twice: the same filter a user would give.
   const std::string device = cstreams::filter_from_environment();
   const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
@@ -172,9 +175,7 @@ TEST_CASE("compare runs one scene on several devices and finds their contacts id
 
 TEST_CASE("run --no-profile reports the same contacts, its wall time and no device times", "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-no-profile";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-no-profile");
   const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
   execute({"run", a, b, "--out", (dir / "timed.csv").string()});
   execute({"run", a, b, "--no-profile", "--out", (dir / "untimed.csv").string(), "--json",
@@ -189,9 +190,7 @@ TEST_CASE("run --no-profile reports the same contacts, its wall time and no devi
 
 TEST_CASE("run --earliest-only counts the same contacts and gives the earliest time without them", "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-earliest";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-earliest");
   const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
   execute({"run", a, b, "--json", (dir / "all.json").string()});
   execute({"run", a, b, "--earliest-only", "--json", (dir / "earliest.json").string()});
@@ -218,9 +217,7 @@ TEST_CASE("run --earliest-only counts the same contacts and gives the earliest t
 TEST_CASE("run --memory-budget keeps the step under the budget with the same contacts, or names what does not fit",
           "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-memory-budget";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-memory-budget");
   const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
   const auto text = [](const fs::path& file) {
     std::ifstream in(file);
@@ -265,9 +262,7 @@ TEST_CASE("run --memory-budget keeps the step under the budget with the same con
 
 TEST_CASE("accuracy on several devices reports false negatives and positives per device", "[cli][quick]")
 {
-  const fs::path dir = fs::temp_directory_path() / "cstreams-cli-accuracy";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = fresh_dir("cstreams-cli-accuracy");
   const std::string device = cstreams::filter_from_environment();
   const std::string queries = cstreams::test::benchmark_path("sample-queries/unit-tests");
   execute({"accuracy", "--queries", queries, "--devices", device, device, "--precision", "single", "--repeat", "1",
