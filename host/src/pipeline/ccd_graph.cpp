@@ -277,21 +277,23 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
         .arg(used ? count_of(input) : value_of(cl_uint(0)))
         .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
   }
+  // The screen in the solver's precision: the only one, or the second after the float one.
+  PassSpec* screen_in_precision = &test;
   if (float_first) {
     TestInputs rounded = in;
     rounded.x0 = in.x0_float;
     rounded.x1 = in.x1_float;
     real_arg(geometry_args(test, rounded, Precision::single), solver.min_separation, Precision::single)
         .arg(value_of(cl_uint(solver.filter)));
-    auto& rest = g.pass("test candidates", {screen, "cs_screen_open_pairs", options})
-                     .launch_over(screened)
-                     .emit(open)
-                     .expect_items(1);
-    rest.arg(buffer_of(screened)).arg(count_of(screened));
-    real(geometry_args(rest, in, solver.precision), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
-  } else {
-    real(geometry_args(test, in, solver.precision), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
+    screen_in_precision = &g.pass("test candidates", {screen, "cs_screen_open_pairs", options})
+                               .launch_over(screened)
+                               .emit(open)
+                               .expect_items(1)
+                               .arg(buffer_of(screened))
+                               .arg(count_of(screened));
   }
+  real(geometry_args(*screen_in_precision, in, solver.precision), solver.min_separation)
+      .arg(value_of(cl_uint(solver.filter)));
 
   const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
   contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
