@@ -93,8 +93,10 @@ inline void cs_point_at(const real* q, const int point, const real t, real out[3
   }
 }
 
-/* Do the features touch at time t (within eps, in scene units)? */
-inline int cs_touching(const real* q, const int vertex_face, const real t, const real eps)
+/* Do the features touch at time t (within eps, in scene units)? *u_at and *v_at: where,
+ * as the parameters of the contact function (trilinear.h): the vertex's barycentric
+ * coordinates along f1 - f0 and f2 - f0, or the closest points' along each edge. */
+inline int cs_touching(const real* q, const int vertex_face, const real t, const real eps, real* u_at, real* v_at)
 {
   real x[4][3];
   for (int i = 0; i < 4; ++i) cs_point_at(q, i, t, x[i]);
@@ -112,6 +114,8 @@ inline int cs_touching(const real* q, const int vertex_face, const real t, const
     if (v < -slack || w < -slack || v + w > 1 + slack) return 0;
     real gap[3];
     for (int k = 0; k < 3; ++k) gap[k] = d[k] - v * e0[k] - w * e1[k];
+    *u_at = v;
+    *v_at = w;
     return cs_dot3(gap, gap) <= eps * eps;
   }
   /* closest points of two segments (Ericson, Real-Time Collision Detection 5.1.9) */
@@ -144,10 +148,13 @@ inline int cs_touching(const real* q, const int vertex_face, const real t, const
   }
   real gap[3];
   for (int k = 0; k < 3; ++k) gap[k] = (x[0][k] + d1[k] * s) - (x[2][k] + d2[k] * u);
+  *u_at = s;
+  *v_at = u;
   return cs_dot3(gap, gap) <= eps * eps;
 }
 
-inline uint cs_cubic(const real* q, const int vertex_face, const real tolerance, real* toi)
+/* at: the time of impact and where (u, v as cs_touching gives them). */
+inline uint cs_cubic(const real* q, const int vertex_face, const real tolerance, real at[3])
 {
   real x0[4][3], v[4][3];
   real scale = 0;
@@ -179,11 +186,11 @@ inline uint cs_cubic(const real* q, const int vertex_face, const real tolerance,
   const int count = cs_cubic_roots(k, roots);
   const real eps = tolerance * fmax(scale, CS_TINY);
   for (int i = 0; i < count; ++i)
-    if (cs_touching(q, vertex_face, roots[i], eps)) {
-      *toi = roots[i];
+    if (cs_touching(q, vertex_face, roots[i], eps, &at[1], &at[2])) {
+      at[0] = roots[i];
       return CS_COLLIDES;
     }
-  *toi = 1;
+  at[0] = 1;
   return CS_SEPARATE;
 }
 

@@ -24,10 +24,10 @@ __kernel void cs_cubic_pairs(__global const uint2* pairs, const uint n, const ui
     real q[24];
     cs_pair_points(pairs[i], vertex_face, x0, x1, faces, edges, q);
     const cs_query query = cs_points_query(q, exact_input);
-    real t = 1;
     if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
-      const uint s = cs_cubic(q, (int)vertex_face, tolerance, &t);
-      if (s == CS_COLLIDES) CS_EMIT(contacts, cs_contact(pairs[i], t, s));
+      real at[3];
+      const uint s = cs_cubic(q, (int)vertex_face, tolerance, at);
+      if (s == CS_COLLIDES) CS_EMIT(contacts, cs_contact(pairs[i], at[0], s));
     }
   }
   CS_EMITTER_END(contacts);

@@ -12,13 +12,14 @@
  *     for (uint j = 0; j < k; ++j) if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = ...;
  *   }
  *
- * counts[r % 3] holds the items of round r. Round r appends to counts[(r + 1) % 3] and
- * clears counts[(r + 2) % 3], which round r - 1 read and round r + 1 appends to, so no
- * launch is needed between rounds. An append past the capacity writes nothing and
- * raises counts[3] to the capacity it needed: the host grows the lists and starts the
- * work again. For the host's statistics and its next batch, counts[4] and counts[5]
- * add up the items of all rounds (low and high word), counts[6] keeps the largest
- * round and counts[7] the number of rounds that had items.
+ * counts[r % 3] holds the items of round r (a seed's extra first items add to
+ * counts[0]). Round r appends to counts[(r + 1) % 3] and clears counts[(r + 2) % 3],
+ * which round r - 1 read and round r + 1 appends to, so no launch is needed between
+ * rounds. An append past the capacity writes nothing and raises counts[3] to the
+ * capacity it needed: the host grows the lists and starts the work again. For the
+ * host's statistics and its next batch, counts[4] and counts[5] add up the items of all
+ * rounds (low and high word), counts[6] keeps the largest round and counts[7] the
+ * number of rounds that had items.
  *
  * On a device that ends loops early (CS_LOOP_TRIPS, runtime/loop_trips.h) the host
  * launches each round over exactly its items, so a work-item makes only one item's
@@ -58,6 +59,15 @@ inline int cs_worklist_fits(__global uint* counts, const uint capacity, const ui
   if (index < capacity) return 1;
   atomic_max(&counts[3], index + 1);
   return 0;
+}
+
+/* Where a seed writes a first item beyond its input's own list[i]: an index below the
+ * capacity, or the capacity itself where the list is full (the host then grows it and
+ * starts again, as after a round's overflow). */
+inline uint cs_worklist_seed_index(__global uint* counts, const uint capacity)
+{
+  const uint at = atomic_inc(&counts[0]);
+  return cs_worklist_fits(counts, capacity, at) ? at : capacity;
 }
 
 inline void cs_worklist_check_loops(__global uint* counts, const uint round)

@@ -462,9 +462,16 @@ struct Scheduler::State {
       unsigned a = bind_own_args(*p.spec, l.seed);
       l.seed.set_arg(a++, l.state);
       l.seed.set_arg(a++, l.lists[0]);
-      context.launch(l.seed, round_up(n, wg), wg, tl(), label);
+      l.seed.set_arg(a++, l.counts);
+      l.seed.set_arg(a++, cl_uint(l.capacity));
+      context.launch(l.seed, round_up(n, round_group), round_group, tl(), label);
       ++p.stats.launches;
       std::uint32_t counts[list_words] = {std::uint32_t(n)};
+      // Rounds launched over exactly their items must know the seed's.
+      if (bounded_loops) {
+        context.read(l.counts, counts, sizeof counts, 0, tl());
+        ++stats.readbacks;
+      }
       unsigned round = 0, batch = bounded_loops ? 1 : std::max(l.rounds, 1u), next_batch = 8;
       for (;;) {
         for (const unsigned last = round + batch; round < last; ++round) {

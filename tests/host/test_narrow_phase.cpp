@@ -235,6 +235,34 @@ TEST_CASE("the time of impact is a lower bound of the first contact", "[narrow][
   }
 }
 
+TEST_CASE("a vertex crossing a face: the time of impact is within the tolerance below the exact one",
+          "[narrow][quick]")
+{
+  // The vertex falls through the face's plane at t = k / 64 exactly, at a point inside
+  // the face, while both drift sideways; every coordinate is exact in float. The
+  // answer may be early by the tolerance twice at most: once for the box it is found
+  // in, once for the boxes just before it that are not refined.
+  Dataset d = constructed(ContactKind::vertex_face);
+  std::vector<double> exact;
+  for (int k = 3; k < 62; k += 2) {
+    const Vec3 in((k % 7 + 1) / 32.0, (k % 5 + 1) / 32.0, 0), drift(k / 128.0, -k / 256.0, 0);
+    const Vec3 top = in + Vec3(0, 0, k / 32.0), bottom = in + Vec3(0, 0, k / 32.0 - 2);  // z = k / 32 - 2 t
+    add(d, query({top, A, B, C}, {bottom + drift, A + drift, B + drift, C + drift}), true);
+    exact.push_back(k / 64.0);
+  }
+  for (Precision p : precisions()) {
+    const SolverOptions o = conservative(p);
+    DeviceSolver solver(cstreams::test::device(), o);
+    const auto r = solver.solve(d.kind, d.queries);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      INFO(to_string(p) << ", exact time " << exact[i]);
+      REQUIRE(r[i].collides());
+      CHECK(r[i].toi <= exact[i]);
+      CHECK(r[i].toi >= exact[i] - 2 * o.tolerance);
+    }
+  }
+}
+
 TEST_CASE("queries with NaN, infinite or (in single precision) too large coordinates are rejected", "[narrow][quick]")
 {
   const Vec3 in(0.25, 0.25, 0);

@@ -82,17 +82,24 @@ __kernel void test_times_two(__global uint* values, const uint n)
 }
 
 /* A work list: input i splits into two items a round until depth test_depth(value),
- * and each leaf counts itself in the input's state, so input i ends with 2^depth. */
+ * and each leaf counts itself in the input's state, so input i ends with 2^depth, twice
+ * that where the seed gives it two trees. */
 #include "runtime/worklist.h"
 
 uint test_depth(uint value) { return test_hash(value ^ 0x9e3779b9u) % 12u; }
 
-__kernel void test_tree_seed(__global const uint* values, const uint n, __global uint* leaves, __global uint2* list)
+/* Inputs whose value is odd get a second tree from the seed. */
+__kernel void test_tree_seed(__global const uint* values, const uint n, __global uint* leaves, __global uint2* list,
+                             __global uint* counts, const uint capacity)
 {
   const uint i = get_global_id(0);
   if (i >= n) return;
   list[i] = (uint2)(i, 0);
   leaves[i] = 0;
+  if (values[i] & 1u) {
+    const uint at = cs_worklist_seed_index(counts, capacity);
+    if (at < capacity) list[at] = (uint2)(i, 0);
+  }
 }
 
 __kernel void test_tree_round(__global const uint* values, const uint n, __global uint* leaves,

@@ -54,8 +54,10 @@ template <class T> PassArg value_of(const T& v)
 // stream of inputs: each input's work is a list of items that a round turns into the
 // next round's items, until a round leaves none. The scheduler launches, with the
 // pass's own arguments first and then these:
-//   seed   over the inputs:    __global S* state, __global I* list
-//          one first item per input (list[i]) and the input's state (state[i]);
+//   seed   over the inputs:    __global S* state, __global I* list, __global uint* counts,
+//          const uint capacity
+//          one first item per input (list[i]) and the input's state (state[i]); it may
+//          add more first items at cs_worklist_seed_index (runtime/worklist.h);
 //   round  `round_items` work-items, each group striding over the round's items
 //          (cl_kernels/runtime/worklist.h): __global S* state, __global const I* in,
 //          __global I* out, __global uint* counts, const uint round, const uint capacity,
@@ -69,9 +71,9 @@ struct Worklist {
   std::size_t item_bytes = 0;    // I
   std::size_t state_bytes = 0;   // S, per input
   std::size_t round_items = 0;   // work-items a round launches
-  // Work-items a group of a round launch, at most the context's (0: the context's).
-  // Groups share nothing but an append, so a round kernel heavy in registers can run
-  // in small groups, as many at once as the device's registers hold.
+  // Work-items a group of a round launch and of the seed's, at most the context's (0:
+  // the context's). Groups share nothing but an append, so kernels heavy in registers
+  // can run in small groups, as many at once as the device's registers hold.
   std::size_t round_group = 0;
 };
 
