@@ -91,12 +91,7 @@ inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real se
     narrow_hi[i] = fmin(hi[i], k_hi);
     if (narrow_lo[i] > narrow_hi[i]) return 0;
   }
-  b->t0 = narrow_lo[0];
-  b->t1 = narrow_hi[0];
-  b->u0 = narrow_lo[1];
-  b->u1 = narrow_hi[1];
-  b->v0 = narrow_lo[2];
-  b->v1 = narrow_hi[2];
+  *b = cs_box_of(narrow_lo, narrow_hi);
   return 1;
 }
 

@@ -119,12 +119,7 @@ inline int cs_guess_box(const real q[24], const cs_query* query, const int verte
     lo[j] = fmax((real)0, centre - radius);
     hi[j] = fmin((real)1, centre + radius);
   }
-  b->t0 = lo[0];
-  b->t1 = hi[0];
-  b->u0 = lo[1];
-  b->u1 = hi[1];
-  b->v0 = lo[2];
-  b->v1 = hi[2];
+  *b = cs_box_of(lo, hi);
   return 1;
 }
 

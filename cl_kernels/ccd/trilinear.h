@@ -21,6 +21,13 @@ typedef struct {
   real t0, t1, u0, u1, v0, v1;
 } cs_box;
 
+/* The box from its lower and upper corner, (t, u, v) each. */
+inline cs_box cs_box_of(const real lo[3], const real hi[3])
+{
+  const cs_box b = {lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]};
+  return b;
+}
+
 /* c[j][k]: coefficient j (A, B, C, D, E, G) of coordinate k; w[j][k] its error weight. */
 typedef struct {
   real c[6][3];
