@@ -93,9 +93,9 @@ typedef struct {
  * from then on, every box that starts later is pruned. The box is searched like any
  * other, so answers keep their meaning. It is not smaller: centred on the closest
  * points of a near miss, a box whose first visit is a contact counts gaps within the
- * tolerance as contacts that the halving excludes (at an eighth, 171 more false
- * positives on the real steps, measured in double). Returns 0 where the cubic solver
- * finds no touch. */
+ * tolerance as contacts that the halving excludes (at an eighth, 171 false positives
+ * on the real steps instead of 1, measured in double). Returns 0 where the cubic
+ * solver finds no touch. */
 inline int cs_guess_box(const real q[24], const cs_query* query, const int vertex_face, const real tolerance,
                         cs_box* b)
 {
