@@ -31,13 +31,11 @@ inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real se
   for (int k = 0; k < 3; ++k) {
     fm[k] = cs_trilinear_at(f, k, mid[0], mid[1], mid[2], &fr[k]);
     fr[k] += separation;
-    /* dF/dt = B + u D + v G, dF/du = C + t D, dF/dv = E + t G: their middles at the
-     * centre, their radii the reach of the other parameters over the box plus the
-     * coefficients' error weights, which also cover the rounding of the middles. */
-    const real B = f->c[1][k], C = f->c[2][k], D = f->c[3][k], E = f->c[4][k], G = f->c[5][k];
-    jm[k][0] = B + mid[1] * D + mid[2] * G;
-    jm[k][1] = C + mid[0] * D;
-    jm[k][2] = E + mid[0] * G;
+    /* F's slopes: their middles at the centre, their radii the reach of the other
+     * parameters over the box plus the coefficients' error weights, which also cover
+     * the rounding of the middles. */
+    cs_trilinear_slopes(f, k, mid, jm[k]);
+    const real D = f->c[3][k], G = f->c[5][k];
     jr[k][0] = (rad[1] * fabs(D) + rad[2] * fabs(G) + f->w[1][k] + hi[1] * f->w[3][k] + hi[2] * f->w[5][k]) * grow +
                (real)8 * CS_TINY;
     jr[k][1] = (rad[0] * fabs(D) + f->w[2][k] + hi[0] * f->w[3][k]) * grow + (real)8 * CS_TINY;

@@ -103,13 +103,12 @@ inline int cs_guess_box(const real q[24], const cs_query* query, const int verte
   if (cs_cubic(q, vertex_face, tolerance, at) != CS_COLLIDES) return 0;
   const cs_trilinear f = cs_make_trilinear(query, vertex_face);
   const real tol = tolerance * cs_query_scale(query);
-  /* How fast F moves along t, u and v there: dF/dt = B + u D + v G, dF/du = C + t D,
-   * dF/dv = E + t G; the largest coordinate's. */
+  /* How fast F moves along t, u and v there: the largest coordinate's slope. */
   real rate[3] = {0, 0, 0};
   for (int k = 0; k < 3; ++k) {
-    rate[0] = fmax(rate[0], fabs(f.c[1][k] + at[1] * f.c[3][k] + at[2] * f.c[5][k]));
-    rate[1] = fmax(rate[1], fabs(f.c[2][k] + at[0] * f.c[3][k]));
-    rate[2] = fmax(rate[2], fabs(f.c[4][k] + at[0] * f.c[5][k]));
+    real slope[3];
+    cs_trilinear_slopes(&f, k, at, slope);
+    for (int j = 0; j < 3; ++j) rate[j] = fmax(rate[j], fabs(slope[j]));
   }
   real lo[3], hi[3];
   for (int j = 0; j < 3; ++j) {

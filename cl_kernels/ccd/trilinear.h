@@ -83,6 +83,15 @@ inline real cs_trilinear_at(const cs_trilinear* f, const int k, const real t, co
   return f->c[0][k] + t * f->c[1][k] + u * f->c[2][k] + tu * f->c[3][k] + v * f->c[4][k] + tv * f->c[5][k];
 }
 
+/* F_k's slopes along t, u and v at the parameters `at`, as computed (no error bound):
+ * dF/dt = B + u D + v G, dF/du = C + t D, dF/dv = E + t G. */
+inline void cs_trilinear_slopes(const cs_trilinear* f, const int k, const real at[3], real slope[3])
+{
+  slope[0] = f->c[1][k] + at[1] * f->c[3][k] + at[2] * f->c[5][k];
+  slope[1] = f->c[2][k] + at[0] * f->c[3][k];
+  slope[2] = f->c[4][k] + at[0] * f->c[5][k];
+}
+
 /* Bounds F over the box. Returns 0 when F certainly stays farther than `separation`
  * from zero there: along the coordinate axes, along F at the box centre, or along the
  * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
