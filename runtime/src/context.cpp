@@ -228,7 +228,8 @@ Buffer::Buffer(Context& context, std::size_t bytes, const char* label)
     throw DeviceMemoryExhausted(label, bytes, device.name + " allocates at most " + mebibytes(device.max_allocation) +
                                               " at once");
   const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
-  if (bytes > limit || in_use > limit - bytes)
+  // An empty buffer (one word, below) is not counted, so no limit refuses it.
+  if (bytes > 0 && (bytes > limit || in_use > limit - bytes))
     throw DeviceMemoryExhausted(label, bytes, mebibytes(in_use) + " of the " + mebibytes(limit) + " of " + device.name +
                                               " are in use");
   cl_int status = CL_SUCCESS;

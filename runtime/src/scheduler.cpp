@@ -23,10 +23,12 @@ struct StreamState {
   std::size_t limit = SIZE_MAX;
   bool known = true;
   std::uint32_t slot = no_slot;  // count slot of a variable stream
+  std::string handed_to;         // the stream its buffer went to in the last run (PassSpec::hand_over)
 };
 
 struct EmitterState {
   StreamId stream;
+  StreamId handed_from;  // the input whose buffer the stream takes (PassSpec::hand_over), if any
   Buffer items;   // registration segments, from the scheduler's idle ones; held until the stage's counters are read
   std::size_t needed = 0;         // bytes of segments the last execution asked for
   std::size_t segment_bytes = 0;  // of the segments this run's execution held
@@ -121,6 +123,7 @@ struct Scheduler::State {
   Timeline* tl() { return options.profile ? &timeline : nullptr; }
   const StreamSpec& spec(StreamId s) const { return graph.stream(s); }
   StreamState& state(StreamId s) { return streams.at(s.index); }
+  const StreamState& state(StreamId s) const { return streams.at(s.index); }
   std::size_t words(StreamId s) const { return spec(s).element_bytes / 4; }
 
   void allocate(StreamId s, std::size_t items)
@@ -546,6 +549,11 @@ struct Scheduler::State {
       if (p.mode == Registration::global_atomic)
         for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(*p.spec);
       if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
+      // Without segments to hand over, the output needs its own buffer: as large as the
+      // input, a first guess that saves a rerun where the output is about its size.
+      for (auto& e : p.emitters)
+        if (e.handed_from != StreamId{} && !hands_over(p, e) && state(e.stream).capacity < state(e.handed_from).count)
+          with_memory([&] { grow(e.stream, state(e.handed_from).count); });
       bind_args(p);
       context.launch(p.active(), global, wg, tl(), label);
       ++p.stats.launches;
@@ -568,10 +576,7 @@ struct Scheduler::State {
           ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets");
           scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
         });
-        merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments),
-                               plan_of(e), cl_uint(e.planned), cl_uint(first_segment_capacity(*p.spec)), counters,
-                               cl_uint(e.overflow_slot), dst.buffer, cl_uint(dst.capacity));
-        context.launch(merge_planned, std::size_t(segment_items(*p.spec, e, e.segments)), wg, tl(), label);
+        if (!hands_over(p, e)) merge_segments(p, e);
       }
     }
     if (p.spec->culls()) {
@@ -580,6 +585,52 @@ struct Scheduler::State {
         compactor.compact(state(p.spec->cull_source).buffer, words(p.spec->cull_source), p.keep, n, dst.buffer,
                           dst.capacity, counters, dst.slot, tl(), label.c_str());
       });
+    }
+  }
+
+  // Segmented lock: the segments' items, in the order of their groups, into the stream.
+  // The merge also completes the offsets with their total, which makes them a plan;
+  // with `copy` false it does only that.
+  void merge_segments(const PassState& p, const EmitterState& e, bool copy = true)
+  {
+    const auto& dst = state(e.stream);
+    merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
+                           cl_uint(e.planned), cl_uint(first_segment_capacity(*p.spec)), counters,
+                           cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0));
+    context.launch(merge_planned, copy ? std::size_t(segment_items(*p.spec, e, e.segments)) : 1,
+                   context.work_group_size(), tl(), p.spec->name);
+  }
+
+  // Whether this execution packs the emitter's items into the buffer of an input
+  // (PassSpec::hand_over): only once the stage's counters are read, since until then
+  // the pass may run again and read its input.
+  static bool hands_over(const PassState& p, const EmitterState& e)
+  {
+    return p.mode == Registration::segmented_lock && e.handed_from != StreamId{};
+  }
+
+  // After the stage's counters are read and no pass of it runs again: each handed-over
+  // output takes a buffer that holds its items (its own, else the input's, else a new
+  // one), the other goes back, and the segments are packed there. The input is left
+  // empty, which run() checks for before it reads the input again.
+  void pack_handed_over(PassState& p)
+  {
+    for (auto& e : p.emitters) {
+      if (!hands_over(p, e)) continue;
+      auto &in = state(e.handed_from), &out = state(e.stream);
+      const std::size_t items = host_counters[out.slot];
+      if (items > out.limit) throw StreamLimitExceeded(spec(e.stream).name, items, out.limit);
+      if (out.capacity < items && in.capacity >= items) {
+        out.buffer = std::move(in.buffer);
+        out.capacity = in.capacity;
+      }
+      allocate(e.handed_from, 0);
+      in.count = 0;
+      in.known = true;
+      in.handed_to = spec(e.stream).name;
+      out.handed_to.clear();  // a stream swapped with a spent input held its mark
+      if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
+      if (e.segments > 0) merge_segments(p, e);
     }
   }
 
@@ -606,12 +657,19 @@ struct Scheduler::State {
     e.planned_total = host_counters[state(e.stream).slot];
   }
 
+  // After the stage's counters are read: whether the emitter's items outgrew its stream
+  // (a handed-over one gets its buffer only once they are known).
+  bool outgrew(const PassState& p, const EmitterState& e) const
+  {
+    return !hands_over(p, e) && host_counters[state(e.stream).slot] > state(e.stream).capacity;
+  }
+
   // After the stage's counters are read: whether an output of the pass overflowed its
   // segments or its stream.
   bool overflowed(const PassState& p)
   {
     for (const auto& e : p.emitters)
-      if (segments_overflowed(p, e) || host_counters[state(e.stream).slot] > state(e.stream).capacity) return true;
+      if (segments_overflowed(p, e) || outgrew(p, e)) return true;
     if (!p.spec->culls()) return false;
     const auto& target = state(p.spec->cull_target);
     return host_counters[target.slot] > target.capacity;
@@ -635,6 +693,11 @@ struct Scheduler::State {
       std::copy_if(stage.begin(), stage.end(), std::back_inserter(overflowing),
                    [&](PassState* p) { return overflowed(*p); });
       busy.assign(overflowing.begin(), overflowing.end());
+      // Segments still to be packed into a handed-over buffer hold what is needed.
+      for (PassState* p : stage)
+        if (!overflowed(*p) && std::any_of(p->emitters.begin(), p->emitters.end(),
+                                           [&](const EmitterState& e) { return hands_over(*p, e); }))
+          busy.push_back(p);
       std::vector<std::pair<PassState*, Redo>> redo;
       for (PassState* p : overflowing) {
         const bool atomic = p->mode == Registration::global_atomic;
@@ -643,11 +706,12 @@ struct Scheduler::State {
           auto& dst = state(e.stream);
           if (segments_overflowed(*p, e)) {
             // The rerun plans from this execution's counts, so every group fits.
+            if (hands_over(*p, e)) merge_segments(*p, e, false);
             if (p->mode == Registration::segmented_lock) adopt_plan(e);
             else e.segment_capacity = grown(host_counters[e.overflow_slot]);
             r = Redo::full;
           }
-          if (host_counters[dst.slot] > dst.capacity) {
+          if (outgrew(*p, e)) {
             const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot]);
             r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
           }
@@ -671,6 +735,7 @@ struct Scheduler::State {
         ++p->stats.reruns;
       }
     }
+    for (PassState* p : stage) pack_handed_over(*p);
     for (PassState* p : stage)
       if (p->mode == Registration::segmented_lock)
         for (auto& e : p->emitters) adopt_plan(e);
@@ -708,6 +773,12 @@ struct Scheduler::State {
       for (auto& e : p.emitters) e.segment_bytes = 0;
     }
     stage_needs.clear();
+    for (const auto& p : passes)
+      for (const auto& handover : p.spec->handovers)
+        if (!state(handover.first).handed_to.empty())
+          throw Error("pass " + p.spec->name + " cannot run: stream " + spec(handover.first).name +
+                      " gave its buffer to " + state(handover.first).handed_to +
+                      " in the last run; upload to it or swap it first");
     for (const auto& p : passes)
       for (StreamId s : pass_outputs(*p.spec))
         if (spec(s).variable) state(s).known = false;
@@ -779,9 +850,12 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
   const auto order = s.graph.schedule();
   std::uint32_t slots = 0;
   s.streams.resize(s.graph.streams().size());
+  std::vector<bool> handed_over(s.streams.size(), false);  // takes an input's buffer from its first run
+  for (const auto& pass : s.graph.passes())
+    for (const auto& handover : pass.handovers) handed_over[handover.second.index] = true;
   for (std::size_t i = 0; i < s.streams.size(); ++i) {
     const auto& spec = s.graph.streams()[i];
-    s.allocate(StreamId{std::uint32_t(i)}, spec.size);
+    s.allocate(StreamId{std::uint32_t(i)}, handed_over[i] ? 0 : spec.size);
     if (spec.variable) {
       s.streams[i].slot = slots++;
     } else {
@@ -803,6 +877,8 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     for (StreamId e : spec.emits) {
       EmitterState es;
       es.stream = e;
+      for (const auto& [input, output] : spec.handovers)
+        if (output == e) es.handed_from = input;
       es.overflow_slot = slots++;
       p.emitters.push_back(std::move(es));
     }
@@ -827,6 +903,7 @@ void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
   s.context.write(st.buffer, items, count * s.spec(stream).element_bytes);
   st.count = count;
   st.known = true;
+  st.handed_to.clear();
 }
 
 void Scheduler::download(StreamId stream, void* items, std::size_t count) const
@@ -871,6 +948,7 @@ void Scheduler::set_capacity(StreamId stream, std::size_t items)
   if (!s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is fixed-length; resize it instead");
   s.allocate(stream, items);
   s.state(stream).count = std::min(s.state(stream).count, items);
+  s.state(stream).handed_to.clear();
 }
 
 void Scheduler::set_limit(StreamId stream, std::size_t items)
@@ -900,6 +978,7 @@ void Scheduler::swap(StreamId a, StreamId b)
   std::swap(x.count, y.count);
   std::swap(x.capacity, y.capacity);
   std::swap(x.known, y.known);
+  std::swap(x.handed_to, y.handed_to);
 }
 
 const Buffer& Scheduler::buffer(StreamId stream) const { return state_->state(stream).buffer; }

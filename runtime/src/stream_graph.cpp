@@ -114,6 +114,21 @@ std::vector<std::size_t> StreamGraph::schedule() const
       throw Error("pass " + pass.name + " stops the run on a flag it does not write");
     if (pass.culls() && !stream(pass.cull_target).variable)
       throw Error("pass " + pass.name + " compacts into fixed-length stream " + stream(pass.cull_target).name);
+    for (const auto& [input, output] : pass.handovers) {
+      const auto inputs = pass_inputs(pass);
+      if (std::find(inputs.begin(), inputs.end(), input) == inputs.end() ||
+          std::find(pass.emits.begin(), pass.emits.end(), output) == pass.emits.end() || !stream(input).variable ||
+          stream(input).element_bytes != stream(output).element_bytes)
+        throw Error("pass " + pass.name + " hands the buffer of " + stream(input).name + " over to " +
+                    stream(output).name + ", but does not read the one as a variable stream and emit the other, "
+                    "items of one size");
+      for (const auto& other : passes_) {
+        const auto reads = pass_inputs(other);
+        if (&other != &pass && std::find(reads.begin(), reads.end(), input) != reads.end())
+          throw Error("pass " + pass.name + " hands the buffer of " + stream(input).name + " over to " +
+                      stream(output).name + ", but pass " + other.name + " reads it too");
+      }
+    }
   }
 
   std::vector<std::vector<std::size_t>> deps(passes_.size());

@@ -30,6 +30,19 @@ __kernel void test_expand(__global const uint* values, const uint n, CS_EMITTER_
   CS_EMITTER_END(pairs);
 }
 
+/* A generation of values: value v begets test_emit_count(v) values, the way a BVTT
+ * front update turns a front into the next one. */
+__kernel void test_beget(__global const uint* values, const uint n, CS_EMITTER_PARAMS(uint, next))
+{
+  CS_EMITTER_BEGIN(next);
+  const uint i = get_global_id(0);
+  if (i < n) {
+    const uint v = values[i], m = test_emit_count(v);
+    for (uint k = 0; k < m; ++k) CS_EMIT(next, test_hash(v + k + 1u));
+  }
+  CS_EMITTER_END(next);
+}
+
 __kernel void test_square(__global const uint* values, const uint n, __global uint* squares)
 {
   const uint i = get_global_id(0);

@@ -405,6 +405,60 @@ TEST_CASE("a pass launched over several streams gets a work-item for each of the
   }
 }
 
+TEST_CASE("a pass hands its input's buffer over to what it emits, and the device holds one of them",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const auto beget = [](const std::vector<std::uint32_t>& values) {
+    std::vector<std::uint32_t> next;
+    for (const std::uint32_t v : values)
+      for (std::uint32_t k = 0; k < cstreams::test::test_emit_count(v); ++k) next.push_back(cstreams::test::test_hash(v + k + 1));
+    return next;
+  };
+  for (const auto registration : {Registration::segmented_lock, Registration::global_atomic, Registration::lock_free}) {
+    INFO("registration = " << to_string(registration));
+    StreamGraph g;
+    const auto now = g.variable("now", 4, 1024), next = g.variable("next", 4, 1024);
+    g.pass("beget", {program, "test_beget"}).launch_over(now).emit(next).hand_over(now, next).arg(buffer_of(now)).arg(count_of(now));
+    Scheduler s(ctx, g, {registration, true});
+    // Generations grow about 2.6 times: the input's buffer soon holds too little and
+    // a bigger one replaces it; bursts of 40 overflow a group's first segments.
+    auto values = random_values(3000, 17);
+    s.upload(now, values);
+    for (int generation = 0; generation < 4; ++generation) {
+      INFO("generation " << generation);
+      s.run();
+      values = beget(values);
+      CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(values));
+      const auto& streams = s.stats().streams;
+      if (registration == Registration::segmented_lock) {
+        CHECK(s.count(now) == 0);
+        CHECK(streams.at(now.index).bytes == 0);
+      }
+      CHECK(streams.at(next.index).bytes >= values.size() * 4);
+      // The input is spent: reading it again would lose what it held.
+      if (registration == Registration::segmented_lock)
+        CHECK_THROWS_WITH(s.run(), Catch::Contains("stream now gave its buffer to next"));
+      s.swap(now, next);
+    }
+    // A smaller generation, uploaded, is packed into the buffer it came from.
+    values = random_values(500, 19);
+    s.upload(now, values);
+    s.run();
+    CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(beget(values)));
+  }
+
+  StreamGraph shared;
+  const auto a = shared.variable("a", 4, 1), b = shared.variable("b", 4, 1), c = shared.variable("c", 4, 1);
+  shared.pass("p", {program, "k"}).launch_over(a).emit(b).hand_over(a, b);
+  shared.pass("q", {program, "k"}).launch_over(a).emit(c);
+  CHECK_THROWS_WITH(shared.schedule(), Catch::Contains("pass q reads it too"));
+  StreamGraph sizes;
+  const auto x = sizes.variable("x", 4, 1), y = sizes.variable("y", 8, 1);
+  sizes.pass("p", {program, "k"}).launch_over(x).emit(y).hand_over(x, y);
+  CHECK_THROWS_WITH(sizes.schedule(), Catch::Contains("items of one size"));
+}
+
 TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
 {
   StreamGraph g;

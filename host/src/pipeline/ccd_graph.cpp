@@ -425,7 +425,8 @@ struct GraphBuilder {
                        .read(s.node_boxes)
                        .write(s.searches_cut);
     if (bounded_loops) update.stop_if(s.searches_cut);
-    if (keep_front) update.emit(s.next_front);
+    // The next front is packed into the buffer of the one it came from.
+    if (keep_front) update.emit(s.next_front).hand_over(s.front, s.next_front);
     update.emit(s.triangle_pairs)
         .expect_items(4)
         .arg(buffer_of(s.front))

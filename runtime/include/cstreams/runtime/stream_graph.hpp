@@ -97,6 +97,7 @@ struct PassSpec {
   std::vector<StreamId> emits;        // variable-length outputs, through registration
   std::vector<StreamId> updates;      // fixed-length streams modified in place
   StreamId cull_source, cull_target;  // compaction of cull_source into cull_target
+  std::vector<std::pair<StreamId, StreamId>> handovers;  // (input, emitted stream): hand_over()
   std::vector<PassArg> args;
   double items_per_work_item = 2;     // expected emissions, to size first segments
   std::optional<Worklist> worklist;
@@ -119,6 +120,14 @@ struct PassSpec {
   PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
   PassSpec& expect_items(double per_work_item) { items_per_work_item = per_work_item; return *this; }
   PassSpec& refine(Worklist w) { worklist = std::move(w); return *this; }
+  // The emitted stream `output` takes the buffer of `input`, a variable stream that only
+  // this pass reads: its items are packed there once the stage's counters show that the
+  // pass need not run again, and `input` is left empty (a BVTT front updated into the
+  // buffer it was read from, so that the device holds one front, not two). A run refuses
+  // to start while `input` is empty this way; upload to it or swap it first. Registering
+  // through the global counter writes into `output` during the kernel, so that
+  // registration hands nothing over and `output` gets its own buffer.
+  PassSpec& hand_over(StreamId input, StreamId output) { handovers.emplace_back(input, output); return *this; }
   // After the pass, the scheduler reads the first word of `flag` (a fixed stream the
   // pass writes) and throws RunStopped where it is not 0.
   PassSpec& stop_if(StreamId flag) { stop_flag = flag; return *this; }
