@@ -628,7 +628,6 @@ struct Scheduler::State {
       in.count = 0;
       in.known = true;
       in.handed_to = spec(e.stream).name;
-      out.handed_to.clear();  // a stream swapped with a spent input held its mark
       if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
       if (e.segments > 0) merge_segments(p, e);
     }
@@ -745,6 +744,7 @@ struct Scheduler::State {
         if (spec(s).variable) {
           state(s).count = host_counters[state(s).slot];
           state(s).known = true;
+          state(s).handed_to.clear();  // swapped with a spent input, it held that one's mark
         }
   }
 

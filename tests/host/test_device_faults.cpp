@@ -127,14 +127,17 @@ TEST_CASE("a step that runs short of memory gives back registration segments and
     const std::size_t limit = streams + std::size_t(double(peak - streams) * share);
     context.set_memory_limit(limit);
     INFO("limit " << limit << " bytes, peak " << peak << ", streams " << streams << ", share " << share);
-    std::vector<Contact> got;
-    try {
-      got = step_contacts(detector, step);
-    } catch (const runtime::DeviceMemoryExhausted& e) {
-      CHECK(share < 0.9);
-      CHECK_THAT(e.what(), Catch::Contains("allocating"));
-      continue;
+    // Steps after the first reuse what it kept, and may register differently.
+    for (int repeat = 0; repeat < 3; ++repeat) {
+      std::vector<Contact> got;
+      try {
+        got = step_contacts(detector, step);
+      } catch (const runtime::DeviceMemoryExhausted& e) {
+        CHECK(share < 0.9);
+        CHECK_THAT(e.what(), Catch::Contains("allocating"));
+        break;
+      }
+      CHECK(same(got, expected));
     }
-    CHECK(same(got, expected));
   }
 }
