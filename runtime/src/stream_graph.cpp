@@ -120,8 +120,8 @@ std::vector<std::size_t> StreamGraph::schedule() const
           std::find(pass.emits.begin(), pass.emits.end(), output) == pass.emits.end() || !stream(input).variable ||
           stream(input).element_bytes != stream(output).element_bytes)
         throw Error("pass " + pass.name + " hands the buffer of " + stream(input).name + " over to " +
-                    stream(output).name + ", but does not read the one as a variable stream and emit the other, "
-                    "items of one size");
+                    stream(output).name + ": it must read the first, a variable stream, and emit the second, "
+                    "with items of the same size");
       for (const auto& other : passes_) {
         const auto reads = pass_inputs(other);
         if (&other != &pass && std::find(reads.begin(), reads.end(), input) != reads.end())
