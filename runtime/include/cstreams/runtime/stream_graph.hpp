@@ -124,9 +124,10 @@ struct PassSpec {
   // this pass reads: its items are packed there once the stage's counters show that the
   // pass need not run again, and `input` is left empty (a BVTT front updated into the
   // buffer it was read from, so that the device holds one front, not two). A run refuses
-  // to start while `input` is empty this way; upload to it or swap it first. Registering
-  // through the global counter writes into `output` during the kernel, so that
-  // registration hands nothing over and `output` gets its own buffer.
+  // to start while `input` is empty this way; upload to it or swap it first. Only the
+  // segmented-lock registration hands over: the global counter writes into `output`
+  // during the kernel, and lock-free segments share their offsets between emitters, so
+  // under those `output` gets its own buffer.
   PassSpec& hand_over(StreamId input, StreamId output) { handovers.emplace_back(input, output); return *this; }
   // After the pass, the scheduler reads the first word of `flag` (a fixed stream the
   // pass writes) and throws RunStopped where it is not 0.
