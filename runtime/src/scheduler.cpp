@@ -612,7 +612,9 @@ struct Scheduler::State {
   // After the stage's counters are read and no pass of it runs again: each handed-over
   // output takes a buffer that holds its items (its own, else the input's, else a new
   // one), the other goes back, and the segments are packed there. The input is left
-  // empty, which run() checks for before it reads the input again.
+  // empty, which run() checks for before it reads the input again. Taking the input's
+  // buffer gives the input the output's, in steady state the empty one the input was
+  // left with last run, so that a step allocates nothing here.
   void pack_handed_over(PassState& p)
   {
     for (auto& e : p.emitters) {
@@ -621,10 +623,10 @@ struct Scheduler::State {
       const std::size_t items = host_counters[out.slot];
       if (items > out.limit) throw StreamLimitExceeded(spec(e.stream).name, items, out.limit);
       if (out.capacity < items && in.capacity >= items) {
-        out.buffer = std::move(in.buffer);
-        out.capacity = in.capacity;
+        std::swap(out.buffer, in.buffer);
+        std::swap(out.capacity, in.capacity);
       }
-      allocate(e.handed_from, 0);
+      if (in.capacity > 0) allocate(e.handed_from, 0);
       in.count = 0;
       in.known = true;
       in.handed_to = spec(e.stream).name;
@@ -694,8 +696,8 @@ struct Scheduler::State {
       busy.assign(overflowing.begin(), overflowing.end());
       // Segments still to be packed into a handed-over buffer hold what is needed.
       for (PassState* p : stage)
-        if (!overflowed(*p) && std::any_of(p->emitters.begin(), p->emitters.end(),
-                                           [&](const EmitterState& e) { return hands_over(*p, e); }))
+        if (std::any_of(p->emitters.begin(), p->emitters.end(),
+                        [&](const EmitterState& e) { return hands_over(*p, e); }))
           busy.push_back(p);
       std::vector<std::pair<PassState*, Redo>> redo;
       for (PassState* p : overflowing) {
