@@ -117,7 +117,7 @@ Context::Context(std::string_view filter, std::size_t max_work_group_size, std::
 
 Context::Context(const DeviceInfo& device, std::size_t max_work_group_size, std::uint32_t loop_trip_limit)
     : device_(device), memory_limit_(device.global_memory),
-      memory_in_use_(std::make_shared<std::atomic<std::size_t>>(0))
+      memory_(std::make_shared<MemoryAccount>())
 {
   cl_int status = CL_SUCCESS;
   cl_context_properties properties[] = {CL_CONTEXT_PLATFORM, cl_context_properties(device.platform), 0};

@@ -107,6 +107,12 @@ std::size_t Sorter::block_records(std::size_t words) const
   return block >= 2 ? block : 0;
 }
 
+void Sorter::reserve(std::size_t n, std::size_t words)
+{
+  // Runs that fit one block sort in local memory and merge nothing.
+  if (n >= 2 && block_records(words) < n) ensure_capacity(context_, scratch_, n * words * sizeof(cl_uint), "sort scratch");
+}
+
 const Buffer& Sorter::sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline,
                            const char* label)
 {
@@ -121,7 +127,7 @@ const Buffer& Sorter::sort(const Buffer& records, std::size_t n, std::size_t wor
     context_.launch(blocks_, (n + block - 1) / block * wg, wg, timeline, label);
   }
   if (block >= n) return records;
-  ensure_capacity(context_, scratch_, n * words * sizeof(cl_uint), "sort scratch");
+  reserve(n, words);
   // A work-item writes this many records of a merged run; more would leave the GPU idle
   // in the last passes, fewer would repeat the binary searches.
   constexpr std::size_t chunk = 8;

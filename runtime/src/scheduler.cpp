@@ -24,10 +24,12 @@ struct StreamState {
   bool known = true;
   std::uint32_t slot = no_slot;  // count slot of a variable stream
   std::string handed_to;         // the stream its buffer went to in the last run (PassSpec::hand_over)
+  std::size_t peak_bytes = 0;    // the most its buffer held this run
 };
 
 struct EmitterState {
   StreamId stream;
+  double expected = 0;   // items a work-item, before a run has planned the segments (PassSpec::expected_items)
   StreamId handed_from;  // the input whose buffer the stream takes (PassSpec::hand_over), if any
   Buffer items;   // registration segments, from the scheduler's idle ones; held until the stage's counters are read
   std::size_t needed = 0;         // bytes of segments the last execution asked for
@@ -132,6 +134,7 @@ struct Scheduler::State {
     auto& st = state(s);
     st.buffer = Buffer(context, items * spec(s).element_bytes, spec(s).name.c_str());
     st.capacity = items;
+    st.peak_bytes = std::max(st.peak_bytes, st.buffer.bytes());
   }
 
   // Grows a variable stream to hold `needed` items, with slack up to its limit. Its
@@ -214,9 +217,10 @@ struct Scheduler::State {
 
   // At the end of a run: buffers go back, smallest first, while the others would serve
   // this run's stages as well, so that the pool settles at what the stages need, each
-  // buffer shared by as many as it can serve. Then those that serve less than half of
-  // themselves (a burst that has passed: a first step searched from the roots, say) go
-  // back too, and the passes they served take buffers of their size next run.
+  // buffer shared by as many as it can serve. Then those more than an eighth larger
+  // than the most they served go back too (a burst that has passed, or segments sized
+  // before a run had planned them), and the passes they served take buffers of their
+  // size next run: a pool held for many steps holds what the steps plan.
   void keep_needed_segments()
   {
     for (auto& needs : stage_needs) std::sort(needs.begin(), needs.end(), std::greater<>());
@@ -238,7 +242,7 @@ struct Scheduler::State {
     unserved(sizes_of(kept), &served);
     idle_segments.clear();
     for (std::size_t k = 0; k < kept.size(); ++k)
-      if (kept[k].bytes() <= 2 * served[k] + (1u << 20)) idle_segments.push_back(std::move(kept[k]));
+      if (kept[k].bytes() <= served[k] + served[k] / 8 + (1u << 20)) idle_segments.push_back(std::move(kept[k]));
   }
 
   // Runs `allocate`; when the device has no memory left, gives back the scratch of
@@ -255,8 +259,9 @@ struct Scheduler::State {
     allocate();
   }
 
-  // Registration segments, cull flags and work lists of the passes outside the stage
-  // being run. Returns whether any memory was given back.
+  // Registration segments (with their counts, offsets and plans), cull flags and work
+  // lists of the passes outside the stage being run; a pass that loses its plan plans
+  // its next segments afresh. Returns whether any memory was given back.
   bool release_idle_scratch()
   {
     bool freed = false;
@@ -270,7 +275,10 @@ struct Scheduler::State {
     idle_segments.clear();
     for (auto& other : passes) {
       if (std::find(busy.begin(), busy.end(), &other) != busy.end()) continue;
-      for (auto& e : other.emitters) release(e.items);
+      for (auto& e : other.emitters) {
+        for (Buffer* b : {&e.items, &e.counts, &e.offsets, &e.plan}) release(*b);
+        e.planned = e.planned_total = 0;
+      }
       release(other.keep);
       if (auto& l = other.list) {
         release(l->state);
@@ -344,7 +352,7 @@ struct Scheduler::State {
       } else if (p.mode == Registration::segmented_lock) {
         k.set_arg(index++, e.items);
         k.set_arg(index++, e.counts);
-        k.set_arg(index++, cl_uint(first_segment_capacity(*p.spec)));
+        k.set_arg(index++, cl_uint(first_segment_capacity(e)));
         k.set_arg(index++, counters);
         k.set_arg(index++, cl_uint(e.overflow_slot));
         k.set_arg(index++, plan_of(e));
@@ -362,11 +370,10 @@ struct Scheduler::State {
     if (p.spec->culls()) k.set_arg(index++, p.keep);
   }
 
-  std::size_t first_segment_capacity(const PassSpec& spec) const
+  std::size_t first_segment_capacity(const EmitterState& e) const
   {
     const bool per_group = options.registration == Registration::segmented_lock;
-    return std::max<std::size_t>(
-        1, std::size_t(std::ceil(spec.items_per_work_item * double(per_group ? context.work_group_size() : 1))));
+    return std::max<std::size_t>(1, std::size_t(std::ceil(e.expected * double(per_group ? context.work_group_size() : 1))));
   }
 
   const Buffer& plan_of(const EmitterState& e) const { return e.planned ? e.plan : no_plan; }
@@ -374,21 +381,21 @@ struct Scheduler::State {
   // Items the segments of `segments` groups hold: the lock-free ones each hold as much
   // as the busiest of the last run; segmented-lock ones follow the last run's plan
   // (cs_segment_base at `segments`, bounded by the plan's total), then the spill pool.
-  std::uint64_t segment_items(const PassSpec& pass, const EmitterState& e, std::size_t segments) const
+  std::uint64_t segment_items(const EmitterState& e, std::size_t segments) const
   {
     if (segments == 0) return 0;
     if (options.registration == Registration::lock_free) return std::uint64_t(segments) * e.segment_capacity;
     const std::uint64_t planned = std::min(segments, e.planned), total = e.planned_total;
-    return total + total / 4 + (segments - planned) * first_segment_capacity(pass) + segments * spill_per_group;
+    return total + total / 4 + (segments - planned) * first_segment_capacity(e) + segments * spill_per_group;
   }
 
   // Segments follow the last run, so one burst (a first step searched from the roots,
   // say) can ask for more memory than the device has, or than is left of it. Then the
   // pass registers this run through one global counter instead: slower under
   // contention, but its memory is the stream itself.
-  bool segments_fit(const PassSpec& pass, const EmitterState& e, std::size_t global) const
+  bool segments_fit(const EmitterState& e, std::size_t global) const
   {
-    const std::uint64_t items = segment_items(pass, e, segment_count(global));
+    const std::uint64_t items = segment_items(e, segment_count(global));
     if (items > 0xffffffffu) return false;  // the kernels index segments with 32 bits
     const std::size_t bytes = std::size_t(items) * spec(e.stream).element_bytes;
     const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
@@ -413,10 +420,10 @@ struct Scheduler::State {
     p.atomic_this_run = true;
   }
 
-  void prepare_segments(const PassSpec& pass, EmitterState& e, std::size_t global)
+  void prepare_segments(EmitterState& e, std::size_t global)
   {
     e.segments = segment_count(global);
-    const std::size_t bytes = std::size_t(segment_items(pass, e, e.segments)) * spec(e.stream).element_bytes;
+    const std::size_t bytes = std::size_t(segment_items(e, e.segments)) * spec(e.stream).element_bytes;
     // Segments still held from this run's overflowing execution are written anew: kept
     // while they fit.
     if (e.items.bytes() < bytes) give_back_segments(e);
@@ -531,23 +538,23 @@ struct Scheduler::State {
       // Once a run has fallen back it stays there: its reruns must not try segments again.
       p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
       for (auto& e : p.emitters) {
-        if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(*p.spec);
+        if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(e);
         forget_stale_plan(e, segment_count(global));
-        if (p.mode != Registration::global_atomic && !segments_fit(*p.spec, e, global) &&
-            !(release_idle_scratch() && segments_fit(*p.spec, e, global)))
+        if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
+            !(release_idle_scratch() && segments_fit(e, global)))
           fall_back_to_global_counter(p);
       }
       // Each emitter's segments fit alone; all of them together may not.
       if (p.mode != Registration::global_atomic) {
         try {
-          for (auto& e : p.emitters) prepare_segments(*p.spec, e, global);
+          for (auto& e : p.emitters) prepare_segments(e, global);
         } catch (const DeviceMemoryExhausted&) {
           fall_back_to_global_counter(p);
         }
       }
       // Lock-free: the next run tries small segments again.
       if (p.mode == Registration::global_atomic)
-        for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(*p.spec);
+        for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(e);
       if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
       // Without segments to hand over, the output needs its own buffer: as large as the
       // input, a first guess that saves a rerun where the output is about its size.
@@ -595,9 +602,9 @@ struct Scheduler::State {
   {
     const auto& dst = state(e.stream);
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
-                           cl_uint(e.planned), cl_uint(first_segment_capacity(*p.spec)), counters,
+                           cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
                            cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0));
-    context.launch(merge_planned, copy ? std::size_t(segment_items(*p.spec, e, e.segments)) : 1,
+    context.launch(merge_planned, copy ? std::size_t(segment_items(e, e.segments)) : 1,
                    context.work_group_size(), tl(), p.spec->name);
   }
 
@@ -625,6 +632,7 @@ struct Scheduler::State {
       if (out.capacity < items && in.capacity >= items) {
         std::swap(out.buffer, in.buffer);
         std::swap(out.capacity, in.capacity);
+        out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
       }
       if (in.capacity > 0) allocate(e.handed_from, 0);
       in.count = 0;
@@ -685,21 +693,25 @@ struct Scheduler::State {
     if (std::none_of(stage.begin(), stage.end(),
                      [](const PassState* p) { return !p->emitters.empty() || p->spec->culls(); }))
       return;
+    std::vector<PassState*> packed;
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
-      // A pass whose outputs all fit is done: its segments hold nothing needed any more,
-      // and may go back if growing another pass's output runs short of memory.
       std::vector<PassState*> overflowing;
       std::copy_if(stage.begin(), stage.end(), std::back_inserter(overflowing),
                    [&](PassState* p) { return overflowed(*p); });
-      busy.assign(overflowing.begin(), overflowing.end());
-      // Segments still to be packed into a handed-over buffer hold what is needed.
+      // A pass whose outputs all fit is done: it packs its handed-over outputs now (its
+      // segments stay busy until then), and its segments hold nothing needed any more,
+      // so they may go back if growing another pass's output runs short of memory.
       for (PassState* p : stage)
-        if (std::any_of(p->emitters.begin(), p->emitters.end(),
-                        [&](const EmitterState& e) { return hands_over(*p, e); }))
-          busy.push_back(p);
-      std::vector<std::pair<PassState*, Redo>> redo;
+        if (!overflowed(*p) && std::find(packed.begin(), packed.end(), p) == packed.end()) {
+          pack_handed_over(*p);
+          packed.push_back(p);
+        }
+      busy.assign(overflowing.begin(), overflowing.end());
+      if (overflowing.empty()) break;
+      // Pass by pass, so that one packed again gives its segments back before the next
+      // one's outputs grow.
       for (PassState* p : overflowing) {
         const bool atomic = p->mode == Registration::global_atomic;
         Redo r = Redo::none;
@@ -724,19 +736,14 @@ struct Scheduler::State {
             r = std::max(r, Redo::pack);
           }
         }
-        if (r != Redo::none) redo.emplace_back(p, r);
-      }
-      if (redo.empty()) break;
-      for (auto& [p, r] : redo) {
-        const bool atomic = p->mode == Registration::global_atomic;
-        if (r == Redo::full)
-          for (auto& e : p->emitters)
-            context.fill_u32(counters, 0, atomic ? state(e.stream).slot : e.overflow_slot, 1, tl());
+        if (r == Redo::full) clear_counters(*p);
         execute(*p, r);
         ++p->stats.reruns;
+        if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
+                                            [&](const EmitterState& e) { return hands_over(*p, e); }))
+          busy.erase(std::find(busy.begin(), busy.end(), p));
       }
     }
-    for (PassState* p : stage) pack_handed_over(*p);
     for (PassState* p : stage)
       if (p->mode == Registration::segmented_lock)
         for (auto& e : p->emitters) adopt_plan(e);
@@ -748,6 +755,16 @@ struct Scheduler::State {
           state(s).known = true;
           state(s).handed_to.clear();  // swapped with a spent input, it held that one's mark
         }
+  }
+
+  // Before a pass executes again in full: the counters its kernel adds to start from
+  // zero, whichever registration it runs with now.
+  void clear_counters(const PassState& p)
+  {
+    for (const auto& e : p.emitters) {
+      context.fill_u32(counters, 0, state(e.stream).slot, 1, tl());
+      context.fill_u32(counters, 0, e.overflow_slot, 1, tl());
+    }
   }
 
   Kernel build_kernel(const PassSpec& spec, Registration mode, const std::string& name)
@@ -775,6 +792,7 @@ struct Scheduler::State {
       for (auto& e : p.emitters) e.segment_bytes = 0;
     }
     stage_needs.clear();
+    for (auto& st : streams) st.peak_bytes = st.buffer.bytes();
     for (const auto& p : passes)
       for (const auto& handover : p.spec->handovers)
         if (!state(handover.first).handed_to.empty())
@@ -786,6 +804,12 @@ struct Scheduler::State {
         if (spec(s).variable) state(s).known = false;
     context.fill_u32(counters, 0, 0, host_counters.size(), tl());
 
+    // However the run ends (a stop, an error), no pass's scratch is busy afterwards:
+    // allocations between runs may take it.
+    struct Idle {
+      std::vector<const PassState*>& busy;
+      ~Idle() { busy.clear(); }
+    } idle{busy};
     std::vector<PassState*> stage;
     for (auto& p : passes) {
       if (needs_new_stage(p)) {
@@ -794,12 +818,22 @@ struct Scheduler::State {
       }
       busy.assign(stage.begin(), stage.end());
       busy.push_back(&p);
-      execute(p, Redo::full);
+      try {
+        execute(p, Redo::full);
+      } catch (const DeviceMemoryExhausted&) {
+        if (stage.empty()) throw;
+        // Short of memory, the stage ends before this pass: once its counters are read,
+        // its passes' segments hold nothing needed, and this pass may take their memory.
+        flush(stage);
+        stage.clear();
+        busy.assign(1, &p);
+        clear_counters(p);
+        execute(p, Redo::full);
+      }
       if (p.spec->stops()) stop_if_raised(*p.spec);
       stage.push_back(&p);
     }
     flush(stage);
-    busy.clear();
     keep_needed_segments();
     collect_stats();
   }
@@ -840,7 +874,8 @@ struct Scheduler::State {
     stats.scheduler_ns = all - pass_total;
     for (std::size_t i = 0; i < streams.size(); ++i) {
       const auto& sp = graph.streams()[i];
-      stats.streams.push_back({sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes()});
+      stats.streams.push_back(
+          {sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes(), streams[i].peak_bytes});
     }
   }
 };
@@ -879,6 +914,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     for (StreamId e : spec.emits) {
       EmitterState es;
       es.stream = e;
+      es.expected = spec.expected_items(e);
       for (const auto& [input, output] : spec.handovers)
         if (output == e) es.handed_from = input;
       es.overflow_slot = slots++;
@@ -896,12 +932,15 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
 Scheduler::~Scheduler() = default;
 
 void Scheduler::run() { state_->run(); }
+bool Scheduler::release_idle_scratch() { return state_->release_idle_scratch(); }
 
 void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
 {
   auto& s = *state_;
   auto& st = s.state(stream);
-  if (count > st.capacity || !s.spec(stream).variable) s.allocate(stream, count);
+  // What the stream held is replaced, so it goes first; short of memory, idle scratch
+  // goes too.
+  if (count > st.capacity || !s.spec(stream).variable) s.with_memory([&] { s.grow(stream, count, false); });
   s.context.write(st.buffer, items, count * s.spec(stream).element_bytes);
   st.count = count;
   st.known = true;

@@ -407,3 +407,31 @@ TEST_CASE("contacts do not depend on the work-group size a device runs", "[detec
     }
   }
 }
+
+TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks far above it", "[detector][quick]")
+{
+  // The first step searches from seeds; the second is the first from a whole front,
+  // before any run has planned its registration segments; later steps plan from the
+  // last. A step repeated, as a benchmark runs it, on a context of its own so that the
+  // high-water mark and what is in use are the detector's.
+  const Scene scene = cstreams::test::cloth_funnel();
+  const Step step = load_step(scene, 0);
+  for (Solver solver : {Solver::cubic, Solver::conservative}) {
+    runtime::Context context(filter_from_environment());
+    DetectorOptions options;
+    options.solver.solver = solver;
+    Detector detector(context, describe(scene, 0), options);
+    std::vector<std::size_t> peaks, held;
+    for (int repeat = 0; repeat < 5; ++repeat) {
+      run_step(detector, step);
+      peaks.push_back(detector.stats().peak_bytes);
+      held.push_back(context.memory_in_use());
+    }
+    INFO(to_string(solver) << ": held " << held.back() << " bytes; peaks " << peaks[0] << " " << peaks[1] << " "
+                           << peaks[2]);
+    CHECK(held[4] == held[3]);
+    CHECK(peaks[4] == held[4]);  // a settled step allocates nothing
+    // Segments sized for four items a front pair, as they were, took 2.7 times.
+    for (std::size_t peak : peaks) CHECK(double(peak) <= 2 * double(held.back()));
+  }
+}

@@ -222,13 +222,16 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   // every value asks for several times the usual segments. (Lock-free ones hold the
   // busiest work-item's items for every work-item, a burst's size already.)
   Scheduler s(ctx, g, {Registration::segmented_lock, true});
-  s.upload(values, random_values(n, 41));
-  for (int frame = 0; frame < 3; ++frame) {
-    s.run();
+  const auto check_words = [&] {
     const auto p = s.download<Pair>(pairs);
     std::vector<std::uint32_t> expected(p.size());
     std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
     CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
+  };
+  s.upload(values, random_values(n, 41));
+  for (int frame = 0; frame < 3; ++frame) {
+    s.run();
+    check_words();
   }
   const auto& stats = s.stats();
   const std::size_t expand = stats.passes.at(0).segment_bytes, copy = stats.passes.at(1).segment_bytes;
@@ -247,6 +250,15 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   s.run();
   s.run();
   CHECK(s.stats().segment_bytes <= 2 * expand + (1u << 20));
+
+  // Between runs no pass holds anything in its scratch: all of it may go back (for
+  // device work outside the graph short of memory), and the next run allocates it again.
+  const std::size_t held = ctx.memory_in_use(), segments = s.stats().segment_bytes;
+  REQUIRE(s.release_idle_scratch());
+  CHECK(ctx.memory_in_use() + segments <= held);
+  CHECK_FALSE(s.release_idle_scratch());
+  s.run();
+  check_words();
 }
 
 TEST_CASE("under any memory limit a stage either fits, giving back scratch, or fails naming the allocation",

@@ -29,7 +29,7 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
     if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
   }
   for (const auto& st : s.run.streams)
-    streams[st.name] = {{"count", st.count}, {"capacity", st.capacity}, {"bytes", st.bytes}};
+    streams[st.name] = {{"count", st.count}, {"capacity", st.capacity}, {"bytes", st.bytes}, {"peak_bytes", st.peak_bytes}};
   return {{"frame", frame},
           {"host_ms", host_ms},
           {"device_ms", s.device_ns() * 1e-6},
@@ -43,6 +43,7 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
           {"front_level_cap", s.front_level_cap},
           {"front_retries", s.front_retries},
           {"device_bytes", s.device_bytes()},
+          {"peak_bytes", s.peak_bytes},
           {"scratch_bytes", s.run.scratch_bytes},
           {"segment_bytes", s.run.segment_bytes},
           {"passes", passes},
@@ -156,6 +157,8 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
       }
       detector.detect(o.earliest_only ? Report::earliest_toi : Report::contacts);
       stats = detector.stats();
+      // A warm-up's peak counts: it is what the step costs when it first runs.
+      m.peak_bytes = std::max(m.peak_bytes, stats.peak_bytes);
       // With repeats, the first run of a step is a warm-up.
       if (o.repeat == 1 || r > 0) {
         host.push_back(stats.host_ms);
@@ -171,7 +174,6 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     m.steps.push_back(step_json(frame, stats, host_ms, timed));
     m.steps.back()["device_ms"] = device_ms;
     m.contact_count += stats.contacts;
-    m.peak_bytes = std::max(m.peak_bytes, stats.device_bytes());
     std::vector<double> earliest;
     if (o.earliest_only) {
       earliest = detector.earliest_toi();

@@ -67,7 +67,7 @@ struct Measurement {
   std::map<std::string, std::vector<double>> pass_ms;
   std::vector<std::string> pass_order;
   std::vector<double> host_ms, device_ms;
-  std::size_t peak_bytes = 0;
+  std::size_t peak_bytes = 0;  // the device's high-water mark over every step run, warm-ups included
   std::vector<Contact> contacts;      // every step's, in step order, each step canonical (none if earliest_only)
   std::size_t contact_count = 0;      // over all steps, as the device counted them
   std::vector<std::size_t> step_ends;  // where each step's contacts end in `contacts`

@@ -49,20 +49,20 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
   else
     std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
                 median(report.device_ms));
-  std::printf("memory    %.1f MiB on the device at most\n", double(report.peak_bytes) / (1 << 20));
+  std::printf("memory    %.1f MiB on the device at most (during a step)\n", double(report.peak_bytes) / (1 << 20));
 }
 
 // Per step and per pass, for --passes.
 void print_tables(Measurement& report)
 {
-  std::printf("\n%6s %10s %10s %10s %9s %10s %9s %9s %9s\n", "step", "tri pairs", "vf cand", "ee cand", "contacts",
-              "front", "MiB", "device ms", "step ms");
+  std::printf("\n%6s %10s %10s %10s %9s %10s %9s %9s %9s %9s\n", "step", "tri pairs", "vf cand", "ee cand", "contacts",
+              "front", "held MiB", "peak MiB", "device ms", "step ms");
   for (const auto& s : report.steps)
-    std::printf("%6zu %10zu %10zu %10zu %9zu %10zu %9.1f %9.3f %9.3f\n", s["frame"].get<std::size_t>(),
+    std::printf("%6zu %10zu %10zu %10zu %9zu %10zu %9.1f %9.1f %9.3f %9.3f\n", s["frame"].get<std::size_t>(),
                 s["triangle_pairs"].get<std::size_t>(), s["vf_candidates"].get<std::size_t>(),
                 s["ee_candidates"].get<std::size_t>(), s["contacts"].get<std::size_t>(),
                 s["front_pairs"].get<std::size_t>(), s["device_bytes"].get<double>() / (1 << 20),
-                s["device_ms"].get<double>(), s["host_ms"].get<double>());
+                s["peak_bytes"].get<double>() / (1 << 20), s["device_ms"].get<double>(), s["host_ms"].get<double>());
   std::printf("\nmedian device time per pass (ms):\n");
   for (const auto& name : report.pass_order) std::printf("  %-44s %9.3f\n", name.c_str(), median(report.pass_ms[name]));
   std::printf("  %-44s %9.3f\n  %-44s %9.3f\n", "all passes", median(report.device_ms), "step (host wall time)",
@@ -112,6 +112,7 @@ void run(const RunOptions& o)
                      {"faces", scene.face_count()},
                      {"median_host_ms", median(report.host_ms)},
                      {"median_device_ms", median(report.device_ms)},
+                     {"peak_bytes", report.peak_bytes},
                      {"steps", report.steps}};
     write_file_atomically(o.json, [&](std::ostream& out) { out << j.dump(1) << "\n"; });
   }

@@ -92,7 +92,10 @@ struct DetectorStats {
   unsigned launches = 0;            // kernel launches of the last detect(), every one
   unsigned blocking_reads = 0;      // and its blocking reads (counters, flags, contacts)
   std::uint64_t device_ns() const;  // sum of the passes' device time
-  std::size_t device_bytes() const; // streams and scratch
+  std::size_t device_bytes() const; // streams and scratch held after the step
+  // The most the device context held during the step, passing scratch included (and
+  // whatever else the context holds: other detectors on it, say).
+  std::size_t peak_bytes = 0;
 };
 
 // Continuous collision detection of one scene on one device.

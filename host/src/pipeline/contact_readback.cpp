@@ -1,6 +1,7 @@
 #include "contact_readback.hpp"
 
 #include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/error.hpp>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -48,7 +49,7 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
   context.write(first_vertex_, first_vertex.data(), first_vertex.size() * sizeof(cl_uint));
 }
 
-void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
+void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
                            runtime::PassStats& stats, std::vector<Contact>& contacts)
 {
   stats = runtime::PassStats{};
@@ -57,7 +58,16 @@ void ContactReadback::read(const runtime::Scheduler& scheduler, const CcdStreams
   for (const auto& found : streams.contacts) n += scheduler.count(found.first);
   contacts.resize(n);
   if (n == 0) return;
-  runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
+  const auto reserve = [&] {
+    runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
+    sorter_.reserve(n, record_words);
+  };
+  try {
+    reserve();
+  } catch (const runtime::DeviceMemoryExhausted&) {
+    if (!scheduler.release_idle_scratch()) throw;
+    reserve();
+  }
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
   const std::uint64_t launches = context_.kernel_launches();

@@ -25,8 +25,9 @@ public:
   // `stats` receives the device time (with `profile`) and the launches it took. Host
   // memory is kept from step to step (`contacts` only shrinks or grows by the change
   // in count), and the records are turned into contacts on every core: on one core
-  // that had cost more than the transfer on cloth-ball.
-  void read(const runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats,
+  // that had cost more than the transfer on cloth-ball. Short of device memory for its
+  // records, it has the scheduler give back its idle scratch.
+  void read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats,
             std::vector<Contact>& contacts);
   std::size_t scratch_bytes() const { return records_.bytes() + sorter_.scratch_bytes(); }
 

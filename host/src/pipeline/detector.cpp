@@ -205,6 +205,7 @@ void Detector::run_step(Report report)
   State& s = *state_;
   const auto started = std::chrono::steady_clock::now();
   const std::uint64_t launches = s.context.kernel_launches(), reads = s.context.blocking_reads();
+  s.context.reset_memory_high_water();
   const CcdStreams& st = s.streams;
   s.stats.front_retries = s.front.run(*s.scheduler, st);
   runtime::Scheduler& q = *s.scheduler;
@@ -229,6 +230,7 @@ void Detector::run_step(Report report)
   stats.ee_candidates = s.count(st.ee) + s.count(st.kept_ee);
   stats.contacts = 0;
   for (const auto& c : st.contacts) stats.contacts += s.count(c.first);
+  stats.peak_bytes = s.context.memory_high_water();
   stats.launches = unsigned(s.context.kernel_launches() - launches);
   stats.blocking_reads = unsigned(s.context.blocking_reads() - reads);
   stats.host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();

@@ -9,6 +9,22 @@ namespace cstreams::runtime {
 
 class Context;
 
+// What a context's live buffers hold, and the most they have held since the mark was
+// last reset: a step's peak, where what is held after it leaves out its passing scratch.
+struct MemoryAccount {
+  std::atomic<std::size_t> in_use{0};
+  std::atomic<std::size_t> high_water{0};
+
+  void add(std::size_t bytes) noexcept
+  {
+    const std::size_t now = in_use += bytes;
+    std::size_t mark = high_water.load();
+    while (now > mark && !high_water.compare_exchange_weak(mark, now)) {
+    }
+  }
+  void remove(std::size_t bytes) noexcept { in_use -= bytes; }
+};
+
 // An untyped device allocation, counted against its context's memory limit for as
 // long as any copy of it lives. Contents are undefined until written.
 class Buffer {
@@ -24,18 +40,18 @@ public:
 
 private:
   struct Allocation {
-    Allocation(Handle<cl_mem> m, std::size_t b, std::shared_ptr<std::atomic<std::size_t>> account)
-        : mem(std::move(m)), bytes(b), in_use(std::move(account))
+    Allocation(Handle<cl_mem> m, std::size_t b, std::shared_ptr<MemoryAccount> a)
+        : mem(std::move(m)), bytes(b), account(std::move(a))
     {
-      *in_use += bytes;
+      account->add(bytes);
     }
     Allocation(const Allocation&) = delete;
     Allocation& operator=(const Allocation&) = delete;
-    ~Allocation() { *in_use -= bytes; }
+    ~Allocation() { account->remove(bytes); }
 
     Handle<cl_mem> mem;
     std::size_t bytes;
-    std::shared_ptr<std::atomic<std::size_t>> in_use;
+    std::shared_ptr<MemoryAccount> account;
   };
   std::shared_ptr<const Allocation> allocation_;
 };

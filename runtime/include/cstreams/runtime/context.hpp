@@ -87,10 +87,14 @@ public:
 
   // Device memory: what this context's live buffers hold, and the most they may (the
   // device's global memory unless lowered). Buffer refuses allocations past the limit.
-  std::size_t memory_in_use() const noexcept { return *memory_in_use_; }
+  std::size_t memory_in_use() const noexcept { return memory_->in_use; }
   std::size_t memory_limit() const noexcept { return memory_limit_; }
   void set_memory_limit(std::size_t bytes);
-  const std::shared_ptr<std::atomic<std::size_t>>& memory_account() const noexcept { return memory_in_use_; }
+  // The most the live buffers have held since the last reset (which starts it at what
+  // they hold then).
+  std::size_t memory_high_water() const noexcept { return memory_->high_water; }
+  void reset_memory_high_water() noexcept { memory_->high_water = memory_->in_use.load(); }
+  const std::shared_ptr<MemoryAccount>& memory_account() const noexcept { return memory_; }
 
 private:
   DeviceInfo device_;
@@ -100,7 +104,7 @@ private:
   std::uint32_t loop_trip_limit_ = 0;
   std::size_t memory_limit_ = 0;
   std::uint64_t kernel_launches_ = 0, blocking_reads_ = 0;
-  std::shared_ptr<std::atomic<std::size_t>> memory_in_use_;
+  std::shared_ptr<MemoryAccount> memory_;
   std::atomic<std::thread::id> user_{};
   std::unique_ptr<ProgramRegistry> programs_;
 };

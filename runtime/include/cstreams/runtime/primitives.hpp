@@ -72,6 +72,9 @@ public:
   // n must stay below 2^31.
   const Buffer& sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline = nullptr,
                      const char* label = "sort");
+  // Allocates the scratch that sorting n records of `words` words takes, so that a
+  // caller short of memory can make room before it sorts anything.
+  void reserve(std::size_t n, std::size_t words);
   std::size_t scratch_bytes() const { return scratch_.bytes(); }
 
 private:

@@ -39,7 +39,8 @@ struct StreamStats {
   bool variable = false;
   std::size_t count = 0;
   std::size_t capacity = 0;
-  std::size_t bytes = 0;        // device memory held
+  std::size_t bytes = 0;        // device memory held after the run
+  std::size_t peak_bytes = 0;   // and the most it held during the run
 };
 
 struct RunStats {
@@ -67,6 +68,11 @@ public:
   Scheduler& operator=(const Scheduler&) = delete;
 
   void run();
+  // Gives back the scratch that holds nothing between runs (registration segments with
+  // their counts and plans, cull flags, work lists; the next run allocates what it
+  // needs again) and returns whether any memory went back: room for device work
+  // outside the graph that runs short of memory.
+  bool release_idle_scratch();
 
   // Host transfers. Uploading to a fixed stream resizes it to `count` items;
   // uploading to a variable stream sets its count (growing it if needed).

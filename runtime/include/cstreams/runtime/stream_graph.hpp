@@ -99,7 +99,8 @@ struct PassSpec {
   StreamId cull_source, cull_target;  // compaction of cull_source into cull_target
   std::vector<std::pair<StreamId, StreamId>> handovers;  // (input, emitted stream): hand_over()
   std::vector<PassArg> args;
-  double items_per_work_item = 2;     // expected emissions, to size first segments
+  double items_per_work_item = 2;     // expected emissions of each emitted stream, to size first segments
+  std::vector<std::pair<StreamId, double>> emit_expectations;  // what emit(s, per_work_item) set instead
   std::optional<Worklist> worklist;
   StreamId stop_flag;                 // a fixed output: a nonzero first word stops the run
 
@@ -115,6 +116,19 @@ struct PassSpec {
   PassSpec& read(StreamId s) { reads.push_back(s); return *this; }
   PassSpec& write(StreamId s) { writes.push_back(s); return *this; }
   PassSpec& emit(StreamId s) { emits.push_back(s); return *this; }
+  // Emits s, expecting about `per_work_item` items of it a work-item (rather than
+  // expect_items()): what its segments hold before a run has planned them.
+  PassSpec& emit(StreamId s, double per_work_item)
+  {
+    emit_expectations.emplace_back(s, per_work_item);
+    return emit(s);
+  }
+  double expected_items(StreamId s) const
+  {
+    for (const auto& [stream, per_work_item] : emit_expectations)
+      if (stream == s) return per_work_item;
+    return items_per_work_item;
+  }
   PassSpec& update(StreamId s) { updates.push_back(s); return *this; }
   PassSpec& cull(StreamId source, StreamId target) { cull_source = source; cull_target = target; return *this; }
   PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
