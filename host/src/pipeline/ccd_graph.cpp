@@ -426,10 +426,10 @@ struct GraphBuilder {
                        .write(s.searches_cut);
     if (bounded_loops) update.stop_if(s.searches_cut);
     // The next front is packed into the buffer of the one it came from. A front pair
-    // mostly stays one pair (or its children where the boxes start to overlap) and
-    // finds a triangle pair or less: what sizes the segments of the first run from a
-    // front, before any run has planned them (a step after one searched from seeds
-    // would otherwise hold segments for four items of each a pair).
+    // mostly stays one pair (or becomes its children where the boxes start to overlap)
+    // and finds at most about one triangle pair: what sizes the segments of the first
+    // run from a whole front, before any run has planned them. (Four of each, as
+    // before, more than doubled the device memory of the step after the first.)
     if (keep_front) update.emit(s.next_front, 1.5).hand_over(s.front, s.next_front);
     update.emit(s.triangle_pairs, 1)
         .arg(buffer_of(s.front))
