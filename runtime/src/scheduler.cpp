@@ -987,9 +987,13 @@ void Scheduler::set_capacity(StreamId stream, std::size_t items)
 {
   auto& s = *state_;
   if (!s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is fixed-length; resize it instead");
-  s.allocate(stream, items);
-  s.state(stream).count = std::min(s.state(stream).count, items);
-  s.state(stream).handed_to.clear();
+  auto& st = s.state(stream);
+  const std::size_t kept = std::min(st.count, items);
+  const Buffer old = st.buffer;  // held until its first items are copied over
+  s.with_memory([&] { s.allocate(stream, items); });
+  if (kept > 0) s.context.copy(old, st.buffer, kept * s.spec(stream).element_bytes);
+  st.count = kept;
+  st.handed_to.clear();
 }
 
 void Scheduler::set_limit(StreamId stream, std::size_t items)

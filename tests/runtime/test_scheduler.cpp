@@ -164,7 +164,15 @@ TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][sche
   CHECK(s.stats().passes[0].reruns >= 1);
   CHECK(s.stats().passes[0].device_ns > 0);
   CHECK(s.stats().streams[1].bytes >= expected.size() * 8);
+  CHECK(s.stats().streams[1].peak_bytes >= s.stats().streams[1].bytes);
   CHECK(s.stats().scratch_bytes > 0);
+
+  // A smaller capacity keeps the items that still fit.
+  const auto all = s.download<Pair>(pairs);
+  const std::size_t half = all.size() / 2;
+  s.set_capacity(pairs, half);
+  CHECK(s.capacity(pairs) == half);
+  CHECK(s.download<Pair>(pairs) == std::vector<Pair>(all.begin(), all.begin() + std::ptrdiff_t(half)));
 }
 
 TEST_CASE("segmented-lock segments follow the last run, and what they cannot hold spills into its group's place",

@@ -94,7 +94,8 @@ public:
 
   std::size_t count(StreamId stream) const;
   std::size_t capacity(StreamId stream) const;
-  // Sets a variable stream's capacity, smaller ones included (tests force tiny ones).
+  // Sets a variable stream's capacity, smaller ones included; the items that still fit
+  // are kept.
   void set_capacity(StreamId stream, std::size_t items);
   // Caps how far a variable stream may grow: a run that needs more stops with
   // StreamLimitExceeded instead of growing it (a caller that can make do with less,
