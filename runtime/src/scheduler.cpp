@@ -58,6 +58,7 @@ struct ListState {
   Buffer lists[2];  // ping-pong: round r reads lists[r % 2] and appends to the other
   Buffer counts;    // cl_kernels/runtime/worklist.h: counts[list_words]
   std::size_t capacity = 0;
+  std::size_t released = 0;  // the capacity the lists had when memory pressure took them
   unsigned rounds = 0;   // that the last run needed: the next run's first batch
   bool settled = false;  // this run's rounds are done; a rerun of the pass only emits
 };
@@ -259,9 +260,11 @@ struct Scheduler::State {
     allocate();
   }
 
-  // Registration segments (with their counts, offsets and plans), cull flags and work
-  // lists of the passes outside the stage being run; a pass that loses its plan plans
-  // its next segments afresh. Returns whether any memory was given back.
+  // Registration segments (with their counts), cull flags and work lists of the passes
+  // outside the stage being run. Their plans stay (a word a group), so that segments
+  // allocated again are planned ones, and so do their offsets, which a pass done in the
+  // stage being flushed is yet to adopt as its plan. Returns whether any memory was
+  // given back.
   bool release_idle_scratch()
   {
     bool freed = false;
@@ -276,13 +279,14 @@ struct Scheduler::State {
     for (auto& other : passes) {
       if (std::find(busy.begin(), busy.end(), &other) != busy.end()) continue;
       for (auto& e : other.emitters) {
-        for (Buffer* b : {&e.items, &e.counts, &e.offsets, &e.plan}) release(*b);
-        e.planned = e.planned_total = 0;
+        release(e.items);
+        release(e.counts);
       }
       release(other.keep);
       if (auto& l = other.list) {
         release(l->state);
         for (auto& list : l->lists) release(list);
+        l->released = std::max(l->released, l->capacity);
         l->capacity = 0;
       }
     }
@@ -458,7 +462,10 @@ struct Scheduler::State {
     const std::size_t round_group = w.round_group ? std::min(w.round_group, wg) : wg;
     with_memory([&] { ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * w.state_bytes, "work list state"); });
     if (n == 0) return;
-    if (l.capacity < n) allocate_lists(l, grown(n), w.item_bytes);
+    // Lists taken by memory pressure come back at their size, not at one that the rounds
+    // would overflow again.
+    if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes);
+    l.released = 0;
     // A search deeper than this is a kernel that never settles, not work.
     constexpr unsigned most_rounds = 1u << 20;
     // On a device that ends loops early, each round goes over exactly its items, one a

@@ -69,8 +69,8 @@ public:
 
   void run();
   // Gives back the scratch that holds nothing between runs (registration segments with
-  // their counts and plans, cull flags, work lists; the next run allocates what it
-  // needs again) and returns whether any memory went back: room for device work
+  // their counts, cull flags, work lists; the next run allocates what it needs again,
+  // planned as before) and returns whether any memory went back: room for device work
   // outside the graph that runs short of memory.
   bool release_idle_scratch();
 
