@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <iterator>
 #include <map>
 #include <optional>
 
@@ -251,13 +250,7 @@ struct Scheduler::State {
   // is allocated again when the pass next runs) and tries once more.
   template <class Allocate> void with_memory(Allocate allocate)
   {
-    try {
-      allocate();
-      return;
-    } catch (const DeviceMemoryExhausted&) {
-      if (!release_idle_scratch()) throw;
-    }
-    allocate();
+    allocate_making_room(allocate, [this] { return release_idle_scratch(); });
   }
 
   // Registration segments (with their counts), cull flags and work lists of the passes
@@ -704,14 +697,14 @@ struct Scheduler::State {
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
-      std::vector<PassState*> overflowing;
-      std::copy_if(stage.begin(), stage.end(), std::back_inserter(overflowing),
-                   [&](PassState* p) { return overflowed(*p); });
       // A pass whose outputs all fit is done: it packs its handed-over outputs now (its
       // segments stay busy until then), and its segments hold nothing needed any more,
       // so they may go back if growing another pass's output runs short of memory.
+      std::vector<PassState*> overflowing;
       for (PassState* p : stage)
-        if (!overflowed(*p) && std::find(packed.begin(), packed.end(), p) == packed.end()) {
+        if (overflowed(*p)) {
+          overflowing.push_back(p);
+        } else if (std::find(packed.begin(), packed.end(), p) == packed.end()) {
           pack_handed_over(*p);
           packed.push_back(p);
         }

@@ -58,16 +58,12 @@ void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& stre
   for (const auto& found : streams.contacts) n += scheduler.count(found.first);
   contacts.resize(n);
   if (n == 0) return;
-  const auto reserve = [&] {
-    runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
-    sorter_.reserve(n, record_words);
-  };
-  try {
-    reserve();
-  } catch (const runtime::DeviceMemoryExhausted&) {
-    if (!scheduler.release_idle_scratch()) throw;
-    reserve();
-  }
+  runtime::allocate_making_room(
+      [&] {
+        runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
+        sorter_.reserve(n, record_words);
+      },
+      [&] { return scheduler.release_idle_scratch(); });
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
   const std::uint64_t launches = context_.kernel_launches();

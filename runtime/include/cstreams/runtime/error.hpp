@@ -79,6 +79,19 @@ private:
   std::size_t requested_;
 };
 
+// Runs `allocate`; when the device has no memory left, runs `make_room` and, if that
+// gave any memory back, tries once more.
+template <class Allocate, class MakeRoom> void allocate_making_room(Allocate allocate, MakeRoom make_room)
+{
+  try {
+    allocate();
+    return;
+  } catch (const DeviceMemoryExhausted&) {
+    if (!make_room()) throw;
+  }
+  allocate();
+}
+
 // "12.5 MiB"
 std::string mebibytes(std::size_t bytes);
 
