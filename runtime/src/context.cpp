@@ -239,6 +239,20 @@ Buffer::Buffer(Context& context, std::size_t bytes, const char* label)
   allocation_ = std::make_shared<const Allocation>(std::move(mem), bytes, context.memory_account());
 }
 
+Buffer Buffer::slice(std::size_t offset, std::size_t bytes) const
+{
+  if (!allocation_ || bytes == 0 || offset > allocation_->bytes || bytes > allocation_->bytes - offset)
+    throw Error("cannot slice bytes [" + std::to_string(offset) + ", " + std::to_string(offset + bytes) +
+                ") of a buffer of " + std::to_string(this->bytes()));
+  const cl_buffer_region region{offset, bytes};
+  cl_int status = CL_SUCCESS;
+  Handle<cl_mem> mem(clCreateSubBuffer(get(), CL_MEM_READ_WRITE, CL_BUFFER_CREATE_TYPE_REGION, &region, &status));
+  check(status, "clCreateSubBuffer", "bytes " + std::to_string(offset) + " to " + std::to_string(offset + bytes));
+  Buffer view;
+  view.allocation_ = std::make_shared<const Allocation>(std::move(mem), bytes, allocation_);
+  return view;
+}
+
 void ensure_capacity(Context& context, Buffer& buffer, std::size_t bytes, const char* label)
 {
   if (buffer.bytes() < bytes) buffer = Buffer(context, bytes, label);

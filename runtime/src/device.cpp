@@ -80,6 +80,7 @@ DeviceInfo describe(cl_platform_id platform, cl_device_id id, std::size_t p, std
   info.global_memory = device_value<cl_ulong>(id, CL_DEVICE_GLOBAL_MEM_SIZE);
   info.local_memory = device_value<cl_ulong>(id, CL_DEVICE_LOCAL_MEM_SIZE);
   info.max_allocation = device_value<cl_ulong>(id, CL_DEVICE_MAX_MEM_ALLOC_SIZE);
+  info.base_address_align = std::max<std::size_t>(1, device_value<cl_uint>(id, CL_DEVICE_MEM_BASE_ADDR_ALIGN) / 8);
   info.max_work_group_size = device_value<std::size_t>(id, CL_DEVICE_MAX_WORK_GROUP_SIZE);
   const std::string extensions = device_string(id, CL_DEVICE_EXTENSIONS);
   auto has = [&](const char* extension) { return extensions.find(extension) != std::string::npos; };

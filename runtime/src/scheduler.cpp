@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <map>
+#include <numeric>
 #include <optional>
 
 namespace cstreams::runtime {
@@ -24,6 +26,12 @@ struct StreamState {
   std::uint32_t slot = no_slot;  // count slot of a variable stream
   std::string handed_to;         // the stream its buffer went to in the last run (PassSpec::hand_over)
   std::size_t peak_bytes = 0;    // the most its buffer held this run
+  // In a sliced run: a gathered stream's items of earlier slices, which its producer
+  // appends to and its growth keeps; another's items of earlier slices, for the stats.
+  std::size_t base = 0;
+  std::size_t earlier = 0;
+  std::size_t run_items = 0;     // over the last run, every slice's
+  bool partial = false;          // holds the last slice's items only (not gathered)
 };
 
 struct EmitterState {
@@ -141,9 +149,45 @@ struct Scheduler::State {
   // producer runs again, so the old buffer goes first: the device need not hold both.
   void grow(StreamId s, std::size_t needed, bool slack = true)
   {
-    state(s).buffer = Buffer();
-    state(s).capacity = 0;
-    allocate(s, slack ? std::min(grown(needed), std::max(state(s).limit, needed)) : needed);
+    auto& st = state(s);
+    if (st.base > 0) return grow_gathered(s, needed, slack);
+    st.buffer = Buffer();
+    st.capacity = 0;
+    allocate(s, slack ? std::min(grown(needed), std::max(st.limit, needed)) : needed);
+  }
+
+  // A gathered stream keeps the items of earlier slices (StreamState::base), and its
+  // slack counts on the slices left yielding as many items as this one. Where the
+  // device cannot hold the items twice, they wait on the host.
+  void grow_gathered(StreamId s, std::size_t needed, bool slack)
+  {
+    auto& st = state(s);
+    const std::size_t bytes = st.base * spec(s).element_bytes;
+    const std::size_t items =
+        slack ? std::min(grown(needed + (needed - std::min(needed, st.base)) * slices_left), std::max(st.limit, needed))
+              : needed;
+    Buffer kept = std::move(st.buffer);
+    st.capacity = 0;
+    try {
+      allocate(s, items);
+      context.copy(kept, st.buffer, bytes, 0, 0, tl());
+      return;
+    } catch (const DeviceMemoryExhausted&) {
+    }
+    std::vector<unsigned char> waiting(bytes);
+    const std::size_t kept_items = kept.bytes() / spec(s).element_bytes;
+    context.read(kept, waiting.data(), bytes, 0, tl());
+    kept = Buffer();
+    try {
+      allocate(s, items);
+    } catch (const DeviceMemoryExhausted&) {
+      // The memory just given back holds the items again: a caller that makes room
+      // may grow the stream once more.
+      allocate(s, kept_items);
+      context.write(st.buffer, waiting.data(), bytes);
+      throw;
+    }
+    context.write(st.buffer, waiting.data(), bytes);
   }
 
   // Passes whose scratch may hold what is still needed: while a stage runs, its passes
@@ -558,9 +602,11 @@ struct Scheduler::State {
       if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
       // Without segments to hand over, the output needs its own buffer: as large as the
       // input, a first guess that saves a rerun where the output is about its size.
-      for (auto& e : p.emitters)
-        if (e.handed_from != StreamId{} && !hands_over(p, e) && state(e.stream).capacity < state(e.handed_from).count)
-          with_memory([&] { grow(e.stream, state(e.handed_from).count); });
+      for (auto& e : p.emitters) {
+        if (e.handed_from == StreamId{} || hands_over(p, e)) continue;
+        const std::size_t guess = state(e.stream).base + state(e.handed_from).count;
+        if (state(e.stream).capacity < guess) with_memory([&] { grow(e.stream, guess); });
+      }
       bind_args(p);
       context.launch(p.active(), global, wg, tl(), label);
       ++p.stats.launches;
@@ -621,7 +667,9 @@ struct Scheduler::State {
   // one), the other goes back, and the segments are packed there. The input is left
   // empty, which run() checks for before it reads the input again. Taking the input's
   // buffer gives the input the output's, in steady state the empty one the input was
-  // left with last run, so that a step allocates nothing here.
+  // left with last run, so that a step allocates nothing here. Where the output needs
+  // a new buffer, the input is kept until it has one: the pass may then still run
+  // again, in slices, if there is no room for it.
   void pack_handed_over(PassState& p)
   {
     for (auto& e : p.emitters) {
@@ -634,11 +682,11 @@ struct Scheduler::State {
         std::swap(out.capacity, in.capacity);
         out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
       }
+      if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
       if (in.capacity > 0) allocate(e.handed_from, 0);
       in.count = 0;
       in.known = true;
       in.handed_to = spec(e.stream).name;
-      if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
       if (e.segments > 0) merge_segments(p, e);
     }
   }
@@ -693,26 +741,45 @@ struct Scheduler::State {
     if (std::none_of(stage.begin(), stage.end(),
                      [](const PassState* p) { return !p->emitters.empty() || p->spec->culls(); }))
       return;
-    std::vector<PassState*> packed;
+    std::vector<PassState*> packed, overflowing;
+    // Short of memory for a pass's output, where the stage's other passes are done or
+    // can run again, the run may go on in slices from that pass (run_in_slices).
+    const auto out_of_memory = [&](PassState* q) {
+      const auto at = std::find(stage.begin(), stage.end(), q);
+      const bool before = std::any_of(stage.begin(), at, [&](PassState* p) {
+        return std::find(overflowing.begin(), overflowing.end(), p) != overflowing.end();
+      });
+      const bool gone = std::any_of(at + 1, stage.end(), [&](PassState* p) {
+        return std::find(packed.begin(), packed.end(), p) != packed.end() &&
+               std::any_of(p->emitters.begin(), p->emitters.end(), [&](const EmitterState& e) { return hands_over(*p, e); });
+      });
+      flush_failure = before || gone ? SIZE_MAX : std::size_t(q - passes.data());
+    };
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
       // A pass whose outputs all fit is done: it packs its handed-over outputs now (its
       // segments stay busy until then), and its segments hold nothing needed any more,
       // so they may go back if growing another pass's output runs short of memory.
-      std::vector<PassState*> overflowing;
+      overflowing.clear();
       for (PassState* p : stage)
-        if (overflowed(*p)) {
-          overflowing.push_back(p);
-        } else if (std::find(packed.begin(), packed.end(), p) == packed.end()) {
-          pack_handed_over(*p);
+        if (overflowed(*p)) overflowing.push_back(p);
+      for (PassState* p : stage)
+        if (std::find(overflowing.begin(), overflowing.end(), p) == overflowing.end() &&
+            std::find(packed.begin(), packed.end(), p) == packed.end()) {
+          try {
+            pack_handed_over(*p);
+          } catch (const DeviceMemoryExhausted&) {
+            out_of_memory(p);
+            throw;
+          }
           packed.push_back(p);
         }
       busy.assign(overflowing.begin(), overflowing.end());
       if (overflowing.empty()) break;
       // Pass by pass, so that one packed again gives its segments back before the next
       // one's outputs grow.
-      for (PassState* p : overflowing) {
+      for (PassState* p : overflowing) try {
         const bool atomic = p->mode == Registration::global_atomic;
         Redo r = Redo::none;
         for (auto& e : p->emitters) {
@@ -742,6 +809,9 @@ struct Scheduler::State {
         if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
                                             [&](const EmitterState& e) { return hands_over(*p, e); }))
           busy.erase(std::find(busy.begin(), busy.end(), p));
+      } catch (const DeviceMemoryExhausted&) {
+        out_of_memory(p);
+        throw;
       }
     }
     for (PassState* p : stage)
@@ -758,11 +828,12 @@ struct Scheduler::State {
   }
 
   // Before a pass executes again in full: the counters its kernel adds to start from
-  // zero, whichever registration it runs with now.
+  // zero (from the items of earlier slices, for a gathered stream), whichever
+  // registration it runs with now.
   void clear_counters(const PassState& p)
   {
     for (const auto& e : p.emitters) {
-      context.fill_u32(counters, 0, state(e.stream).slot, 1, tl());
+      context.fill_u32(counters, std::uint32_t(state(e.stream).base), state(e.stream).slot, 1, tl());
       context.fill_u32(counters, 0, e.overflow_slot, 1, tl());
     }
   }
@@ -810,32 +881,226 @@ struct Scheduler::State {
       std::vector<const PassState*>& busy;
       ~Idle() { busy.clear(); }
     } idle{busy};
+    for (auto& st : streams) {
+      st.earlier = 0;
+      st.partial = false;
+    }
     std::vector<PassState*> stage;
-    for (auto& p : passes) {
-      if (needs_new_stage(p)) {
-        flush(stage);
-        stage.clear();
+    Failure failure;
+    for (std::size_t i = 0; i < passes.size() && !failure; ++i) {
+      if (i == sliced_pass) {
+        if (!(failure = end_stage(stage))) failure.pass = i;
+        break;
       }
-      busy.assign(stage.begin(), stage.end());
-      busy.push_back(&p);
+      failure = step(passes[i], stage);
+    }
+    if (!failure) failure = end_stage(stage);
+    if (failure.pass != SIZE_MAX) {
+      if (failure.error && !sliceable(failure.pass)) std::rethrow_exception(failure.error);
+      if (failure.error) slices = 1;
+      sliced_pass = failure.pass;
+      run_in_slices(sliced_pass);
+    }
+    keep_needed_segments();
+    collect_stats();
+  }
+
+  // Where a pass had no room even in a stage of its own (error set), or where the run
+  // goes on in slices (pass set).
+  struct Failure {
+    std::exception_ptr error;
+    std::size_t pass = SIZE_MAX;
+    explicit operator bool() const { return pass != SIZE_MAX; }
+  };
+
+  // Flushes the stage and empties it; short of memory for a pass's outputs where the
+  // run may go on in slices from that pass, says so.
+  Failure end_stage(std::vector<PassState*>& stage)
+  {
+    flush_failure = SIZE_MAX;
+    try {
+      flush(stage);
+    } catch (const DeviceMemoryExhausted&) {
+      if (flush_failure == SIZE_MAX) throw;
+      stage.clear();
+      return {std::current_exception(), flush_failure};
+    }
+    stage.clear();
+    return {};
+  }
+
+  // Executes pass `p` in the current stage; short of memory, the stage ends before it:
+  // once its counters are read, its passes' segments hold nothing needed, and `p` may
+  // take their memory. Where even that does not fit (`p` then holds nothing), or a
+  // flush has no room for a pass's outputs, says which pass.
+  Failure step(PassState& p, std::vector<PassState*>& stage)
+  {
+    const std::size_t index = std::size_t(&p - passes.data());
+    if (needs_new_stage(p))
+      if (auto f = end_stage(stage)) return f;
+    busy.assign(stage.begin(), stage.end());
+    busy.push_back(&p);
+    try {
+      execute(p, Redo::full);
+    } catch (const DeviceMemoryExhausted&) {
+      if (stage.empty()) return {std::current_exception(), index};
+      if (auto f = end_stage(stage)) return f;
+      busy.assign(1, &p);
+      clear_counters(p);
       try {
         execute(p, Redo::full);
       } catch (const DeviceMemoryExhausted&) {
-        if (stage.empty()) throw;
-        // Short of memory, the stage ends before this pass: once its counters are read,
-        // its passes' segments hold nothing needed, and this pass may take their memory.
-        flush(stage);
-        stage.clear();
-        busy.assign(1, &p);
-        clear_counters(p);
-        execute(p, Redo::full);
+        return {std::current_exception(), index};
       }
-      if (p.spec->stops()) stop_if_raised(*p.spec);
-      stage.push_back(&p);
     }
-    flush(stage);
-    keep_needed_segments();
-    collect_stats();
+    if (p.spec->stops()) stop_if_raised(*p.spec);
+    stage.push_back(&p);
+    return {};
+  }
+
+  // The pass that runs in slices (SIZE_MAX: none) and into how many.
+  std::size_t sliced_pass = SIZE_MAX;
+  unsigned slices = 1;
+  std::size_t flush_failure = SIZE_MAX;  // the pass whose output a flush had no memory for, if slices may start there
+  std::size_t slices_left = 0;      // after the one running
+
+  // Only a pass over one stream can be sliced; a culled stream would be compacted
+  // slice by slice over what the stream gathered before.
+  bool sliceable(std::size_t first) const
+  {
+    const PassSpec& head = *passes[first].spec;
+    if (!head.launches_over_stream() || !head.also_over.empty() || head.culls()) return false;
+    for (std::size_t j = first + 1; j < passes.size(); ++j)
+      if (passes[j].spec->culls() && spec(passes[j].spec->cull_target).gathered) return false;
+    return true;
+  }
+
+  // Items a slice of `total` holds when the run goes in `slices` slices: a multiple of
+  // what starts a sub-buffer on the device's alignment.
+  std::size_t slice_items(StreamId over, std::size_t total) const
+  {
+    const std::size_t bytes = spec(over).element_bytes, align = context.device().base_address_align;
+    const std::size_t step = align / std::gcd(align, bytes);
+    return std::max(step, round_up((total + slices - 1) / slices, step));
+  }
+
+  // Runs pass `first` and the rest of the graph in slices of its launch stream,
+  // doubling them until a slice fits (Scheduler's class comment).
+  void run_in_slices(std::size_t first)
+  {
+    const StreamId over = passes[first].spec->over;
+    // The passes that depend on what the sliced pass emits run every slice; the rest once.
+    std::vector<bool> every_slice(passes.size(), false), sliced(streams.size(), false);
+    for (std::size_t j = first; j < passes.size(); ++j) {
+      const auto& ins = passes[j].inputs;
+      if (j == first || std::any_of(ins.begin(), ins.end(), [&](StreamId s) { return sliced[s.index]; })) {
+        every_slice[j] = true;
+        for (StreamId s : pass_outputs(*passes[j].spec)) sliced[s.index] = true;
+      }
+    }
+    // Launch streams of those passes that come from passes run once count in the first
+    // slice only, so that no item is tested twice.
+    std::vector<StreamId> once;
+    for (std::size_t j = first + 1; j < passes.size(); ++j) {
+      if (!every_slice[j] || !passes[j].spec->launches_over_stream()) continue;
+      std::vector<StreamId> launched{passes[j].spec->over};
+      launched.insert(launched.end(), passes[j].spec->also_over.begin(), passes[j].spec->also_over.end());
+      for (StreamId s : launched)
+        if (!sliced[s.index] && s != over && std::find(once.begin(), once.end(), s) == once.end()) once.push_back(s);
+    }
+    slices = std::max(slices, 2u);
+    for (;;) {
+      const std::size_t size = slice_items(over, state(over).count);
+      try {
+        run_slices(first, every_slice, sliced, once, size);
+        return;
+      } catch (const DeviceMemoryExhausted&) {
+        if (size <= slice_items(over, 0) || slices >= (1u << 30)) throw;
+        slices *= 2;
+      }
+    }
+  }
+
+  void run_slices(std::size_t first, const std::vector<bool>& every_slice, const std::vector<bool>& sliced,
+                  const std::vector<StreamId>& once, std::size_t size)
+  {
+    const StreamId over = passes[first].spec->over;
+    // What an earlier attempt held goes back: idle scratch, and sliced streams beyond
+    // what a slice of the last run's items needs; the sliced passes register through
+    // the global counter, whose memory is the streams themselves.
+    busy.clear();
+    release_idle_scratch();
+    for (std::size_t j = first; j < passes.size(); ++j)
+      if (every_slice[j]) {
+        fall_back_to_global_counter(passes[j]);
+        // A slice's work list is sized by the slice, not by what the whole input needed.
+        if (passes[j].list) passes[j].list->released = 0;
+      }
+    const std::size_t total = state(over).count, count = (total + size - 1) / std::max<std::size_t>(size, 1);
+    // A gathered stream takes what the last run gathered at once, instead of growing
+    // slice by slice with its items held twice.
+    for (const bool gathered : {false, true})
+      for (std::size_t i = 0; i < streams.size(); ++i) {
+        const StreamId s{std::uint32_t(i)};
+        auto& st = streams[i];
+        if (!sliced[i] || !spec(s).variable || spec(s).gathered != gathered) continue;
+        st.base = st.earlier = 0;
+        const std::size_t share = grown(gathered ? st.run_items : st.run_items / std::max<std::size_t>(count, 1));
+        if (gathered ? st.capacity < st.run_items : st.capacity > share) grow(s, share, false);
+      }
+    // However the slices end, the input and the streams counted once are whole again.
+    auto& in = state(over);
+    struct Whole {
+      StreamState& in;
+      const Buffer buffer;
+      const std::size_t count;
+      std::vector<std::pair<StreamState*, std::size_t>> once;
+      std::vector<StreamState>& streams;
+      ~Whole()
+      {
+        in.buffer = buffer;
+        in.count = count;
+        for (auto& [st, n] : once) st->count = n;
+        for (auto& st : streams) st.base = 0;
+      }
+    } whole{in, in.buffer, in.count, {}, streams};
+    const std::size_t bytes = spec(over).element_bytes;
+    for (std::size_t k = 0, begin = 0; k == 0 || begin < total; ++k, begin += size) {
+      const std::size_t n = std::min(size, total - begin);
+      slices_left = count - std::min(count, k + 1);
+      in.buffer = n > 0 ? whole.buffer.slice(begin * bytes, n * bytes) : whole.buffer;
+      in.count = n;
+      if (k == 1)
+        for (StreamId s : once) {
+          whole.once.emplace_back(&state(s), state(s).count);
+          state(s).count = 0;
+        }
+      context.fill_u32(counters, 0, 0, host_counters.size(), tl());
+      for (std::size_t j = first; j < passes.size(); ++j) {
+        if (k > 0 && !every_slice[j]) continue;
+        if (passes[j].list) passes[j].list->settled = false;
+        for (StreamId s : pass_outputs(*passes[j].spec))
+          if (spec(s).variable) {
+            state(s).known = false;
+            if (state(s).base > 0) context.fill_u32(counters, std::uint32_t(state(s).base), state(s).slot, 1, tl());
+          }
+      }
+      std::vector<PassState*> stage;
+      Failure failure;
+      for (std::size_t j = first; j < passes.size() && !failure; ++j)
+        if (k == 0 || every_slice[j]) failure = step(passes[j], stage);
+      if (!failure) failure = end_stage(stage);
+      if (failure) std::rethrow_exception(failure.error);
+      for (std::size_t i = 0; i < streams.size(); ++i) {
+        if (!sliced[i] || !spec(StreamId{std::uint32_t(i)}).variable) continue;
+        if (spec(StreamId{std::uint32_t(i)}).gathered) streams[i].base = streams[i].count;
+        else if (begin + n < total) streams[i].earlier += streams[i].count;
+      }
+    }
+    stats.slices = unsigned((total + size - 1) / std::max<std::size_t>(size, 1));
+    for (std::size_t i = 0; i < streams.size(); ++i)
+      streams[i].partial = stats.slices > 1 && sliced[i] && !spec(StreamId{std::uint32_t(i)}).gathered;
+    stats.sliced_pass = passes[first].spec->name;
   }
 
   void stop_if_raised(const PassSpec& pass)
@@ -874,8 +1139,9 @@ struct Scheduler::State {
     stats.scheduler_ns = all - pass_total;
     for (std::size_t i = 0; i < streams.size(); ++i) {
       const auto& sp = graph.streams()[i];
-      stats.streams.push_back(
-          {sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes(), streams[i].peak_bytes});
+      streams[i].run_items = streams[i].earlier + streams[i].count;
+      stats.streams.push_back({sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes(),
+                               streams[i].peak_bytes, streams[i].run_items});
     }
   }
 };
@@ -944,6 +1210,7 @@ void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
   s.context.write(st.buffer, items, count * s.spec(stream).element_bytes);
   st.count = count;
   st.known = true;
+  st.partial = false;
   st.handed_to.clear();
 }
 
@@ -954,6 +1221,10 @@ void Scheduler::download(StreamId stream, void* items, std::size_t count) const
   if (count > st.count)
     throw Error("cannot read " + std::to_string(count) + " items of stream " + s.spec(stream).name + ", which holds " +
                 std::to_string(st.count));
+  if (st.partial)
+    throw Error("cannot read stream " + s.spec(stream).name + ": the last run went in " +
+                std::to_string(s.stats.slices) + " slices to fit the device's memory, and the stream kept only the "
+                "last one's items (StreamGraph::gather keeps them all)");
   s.context.read(st.buffer, items, count * s.spec(stream).element_bytes);
 }
 
@@ -1023,6 +1294,7 @@ void Scheduler::swap(StreamId a, StreamId b)
   std::swap(x.count, y.count);
   std::swap(x.capacity, y.capacity);
   std::swap(x.known, y.known);
+  std::swap(x.partial, y.partial);
   std::swap(x.handed_to, y.handed_to);
 }
 

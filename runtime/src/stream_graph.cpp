@@ -20,6 +20,13 @@ StreamId StreamGraph::variable(std::string name, std::size_t element_bytes, std:
   return id;
 }
 
+void StreamGraph::gather(StreamId stream)
+{
+  StreamSpec& s = streams_.at(stream.index);
+  if (!s.variable) throw Error("stream " + s.name + " is fixed-length: a run writes all of it, so there is nothing to gather");
+  s.gathered = true;
+}
+
 ParamId StreamGraph::param(std::string name, std::size_t bytes)
 {
   params_.push_back({std::move(name), bytes});

@@ -29,7 +29,11 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
     if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
   }
   for (const auto& st : s.run.streams)
-    streams[st.name] = {{"count", st.count}, {"capacity", st.capacity}, {"bytes", st.bytes}, {"peak_bytes", st.peak_bytes}};
+    streams[st.name] = {{"count", st.count},
+                        {"items", st.items},
+                        {"capacity", st.capacity},
+                        {"bytes", st.bytes},
+                        {"peak_bytes", st.peak_bytes}};
   return {{"frame", frame},
           {"host_ms", host_ms},
           {"device_ms", s.device_ns() * 1e-6},
@@ -46,6 +50,8 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
           {"peak_bytes", s.peak_bytes},
           {"scratch_bytes", s.run.scratch_bytes},
           {"segment_bytes", s.run.segment_bytes},
+          {"slices", s.run.slices},
+          {"sliced_pass", s.run.sliced_pass},
           {"passes", passes},
           {"streams", streams}};
 }

@@ -131,7 +131,8 @@ public:
   // rounded down to float.
   std::vector<double> earliest_toi() const;
   // The last step's feature pairs before the elementary tests, as the host reference
-  // lays them out.
+  // lays them out. A step that ran in slices to fit the device's memory
+  // (stats().run.slices > 1) kept only its last slice's, and this throws.
   Candidates candidates() const;
   const DetectorStats& stats() const;
   const runtime::StreamGraph& graph() const;

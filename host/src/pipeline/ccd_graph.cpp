@@ -246,6 +246,7 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     for (const auto& [input, kind] : in.candidates) {
       const std::string name = g.stream(input).name;
       const StreamId found = g.variable("contacts from " + name, 16, sized(256));
+      g.gather(found);
       contacts.emplace_back(found, kind);
       auto& test = g.pass("test " + name, {screen, "cs_cubic_pairs", options}).launch_over(input).emit(found).expect_items(0.25);
       real(real(common(test, input, kind), solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
@@ -296,6 +297,8 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
       .arg(value_of(cl_uint(solver.filter)));
 
   const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
+  g.gather(vf);
+  g.gather(ee);
   contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
   // One box a work-item, breadth first across the device (refine.cl): an item is a
   // query index, its work and a box of six reals; the state of a query two keys of at
@@ -412,6 +415,7 @@ struct GraphBuilder {
     if (keep_front) {
       s.front = g.variable("front", 8, sized(std::max(front_size, 4 * nf)));
       s.next_front = g.variable("next front", 8, sized(std::max(front_size, 4 * nf)));
+      g.gather(s.next_front);
     } else {
       s.front = g.fixed("bvtt seeds", 8, front_size);
     }

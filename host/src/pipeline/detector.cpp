@@ -225,9 +225,11 @@ void Detector::run_step(Report report)
   stats.run.scratch_bytes += s.readback.scratch_bytes();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();
-  stats.triangle_pairs = s.count(st.triangle_pairs);
-  stats.vf_candidates = s.count(st.vf) + s.count(st.kept_vf);
-  stats.ee_candidates = s.count(st.ee) + s.count(st.kept_ee);
+  // Over every slice of a step that ran in slices (a stream's count is the last one's).
+  const auto items = [&](runtime::StreamId id) { return has(id) ? stats.run.streams.at(id.index).items : 0; };
+  stats.triangle_pairs = items(st.triangle_pairs);
+  stats.vf_candidates = items(st.vf) + items(st.kept_vf);
+  stats.ee_candidates = items(st.ee) + items(st.kept_ee);
   stats.contacts = 0;
   for (const auto& c : st.contacts) stats.contacts += s.count(c.first);
   stats.peak_bytes = s.context.memory_high_water();

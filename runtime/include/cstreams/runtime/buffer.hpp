@@ -34,6 +34,11 @@ public:
   // device's largest allocation or the context's memory limit.
   Buffer(Context& context, std::size_t bytes, const char* label);
 
+  // Bytes [offset, offset + bytes) of this buffer as a buffer of their own (an OpenCL
+  // sub-buffer), counted in this one's memory and keeping it alive; `offset` must be a
+  // multiple of the device's base_address_align.
+  Buffer slice(std::size_t offset, std::size_t bytes) const;
+
   cl_mem get() const noexcept { return allocation_ ? allocation_->mem.get() : nullptr; }
   std::size_t bytes() const noexcept { return allocation_ ? allocation_->bytes : 0; }
   explicit operator bool() const noexcept { return bool(allocation_); }
@@ -45,13 +50,21 @@ private:
     {
       account->add(bytes);
     }
+    Allocation(Handle<cl_mem> m, std::size_t b, std::shared_ptr<const Allocation> w)
+        : whole(std::move(w)), mem(std::move(m)), bytes(b)
+    {
+    }
     Allocation(const Allocation&) = delete;
     Allocation& operator=(const Allocation&) = delete;
-    ~Allocation() { account->remove(bytes); }
+    ~Allocation()
+    {
+      if (account) account->remove(bytes);
+    }
 
+    std::shared_ptr<const Allocation> whole;  // of a slice; declared first, so released after it
     Handle<cl_mem> mem;
     std::size_t bytes;
-    std::shared_ptr<MemoryAccount> account;
+    std::shared_ptr<MemoryAccount> account;  // of a whole buffer
   };
   std::shared_ptr<const Allocation> allocation_;
 };

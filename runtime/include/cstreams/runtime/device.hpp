@@ -30,6 +30,7 @@ struct DeviceInfo {
   std::size_t global_memory = 0;
   std::size_t local_memory = 0;
   std::size_t max_allocation = 0;
+  std::size_t base_address_align = 1;  // bytes: where a sub-buffer (Buffer::slice) may start
   std::size_t max_work_group_size = 0;
   bool fp64 = false;
   std::string fp64_extension;  // cl_khr_fp64, or cl_amd_fp64 where only that is offered

@@ -41,6 +41,7 @@ struct StreamStats {
   std::size_t capacity = 0;
   std::size_t bytes = 0;        // device memory held after the run
   std::size_t peak_bytes = 0;   // and the most it held during the run
+  std::size_t items = 0;        // emitted over the run, every slice's (count: the last slice's)
 };
 
 struct RunStats {
@@ -50,6 +51,8 @@ struct RunStats {
   unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
   std::size_t scratch_bytes = 0;    // segments (each buffer once), flags, offsets and scan levels
   std::size_t segment_bytes = 0;    // the registration segments alone, each buffer once
+  unsigned slices = 1;              // of the sliced pass's input (1: the run was not sliced)
+  std::string sliced_pass;          // the pass whose input went in slices, if any
 };
 
 // Runs a StreamGraph on one device. It builds every kernel at construction, owns the
@@ -60,6 +63,16 @@ struct RunStats {
 // current stage needs its count, so the stage ends there and the host reads every
 // counter of the stage in one transfer. Streams that overflowed grow; the passes that
 // produced them run again (only the packing, when the segments held everything).
+//
+// A pass that does not fit the device's memory even in a stage of its own, through the
+// global counter, runs in slices: over one slice of its input stream at a time (an
+// OpenCL sub-buffer), followed each time by the passes that depend on what it emits,
+// all through the global counter. Passes after it that do not depend on it run once,
+// in the first slice, and the launch streams those passes emit into the sliced ones
+// count only there. Streams marked StreamGraph::gather collect every slice's items;
+// other outputs of the sliced passes hold the last slice's. Slices double until one
+// fits; a scheduler keeps its number of slices for the runs after, so that a step
+// under a memory budget does not fail first each time.
 class Scheduler {
 public:
   Scheduler(Context& context, StreamGraph graph, SchedulerOptions options = {});

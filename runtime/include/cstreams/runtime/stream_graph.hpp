@@ -160,6 +160,7 @@ struct StreamSpec {
   std::size_t element_bytes = 0;
   bool variable = false;
   std::size_t size = 0;  // item count (fixed) or initial capacity (variable)
+  bool gathered = false; // StreamGraph::gather
 };
 
 struct ParamSpec {
@@ -174,6 +175,12 @@ public:
   StreamId fixed(std::string name, std::size_t element_bytes, std::size_t count);
   StreamId variable(std::string name, std::size_t element_bytes, std::size_t initial_capacity);
   ParamId param(std::string name, std::size_t bytes);
+  // Marks a variable stream that the caller reads after a run (contacts, a front for the
+  // next run). Short of memory, the scheduler may run a pass and those that depend on
+  // it over slices of the pass's input, one slice after another (Scheduler::run); a
+  // stream so marked then gathers the items of every slice, any other keeps only the
+  // last slice's.
+  void gather(StreamId stream);
   PassSpec& pass(std::string name, KernelRef kernel);
 
   const std::vector<StreamSpec>& streams() const { return streams_; }
