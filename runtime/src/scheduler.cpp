@@ -32,6 +32,7 @@ struct StreamState {
   std::size_t earlier = 0;
   std::size_t run_items = 0;     // over the last run, every slice's
   bool partial = false;          // holds the last slice's items only (not gathered)
+  std::size_t released = 0;      // the capacity memory pressure took before its producer ran
 };
 
 struct EmitterState {
@@ -76,6 +77,8 @@ struct PassState {
   Kernel atomic_kernel;   // built on first need: the fallback when segments would not fit
   Registration mode = Registration::global_atomic;  // of the current execution
   bool atomic_this_run = false;
+  bool handed_over = false;  // packed an output into its input's buffer this run
+  bool ran = false;          // executed this run
   const Kernel& active() const { return mode == Registration::global_atomic && atomic_kernel.get() ? atomic_kernel : kernel; }
   std::vector<EmitterState> emitters;
   Buffer keep;
@@ -298,10 +301,10 @@ struct Scheduler::State {
   }
 
   // Registration segments (with their counts), cull flags and work lists of the passes
-  // outside the stage being run. Their plans stay (a word a group), so that segments
-  // allocated again are planned ones, and so do their offsets, which a pass done in the
-  // stage being flushed is yet to adopt as its plan. Returns whether any memory was
-  // given back.
+  // outside the stage being run, and within a run the streams of the passes yet to run.
+  // Their plans stay (a word a group), so that segments allocated again are planned
+  // ones, and so do their offsets, which a pass done in the stage being flushed is yet
+  // to adopt as its plan. Returns whether any memory was given back.
   bool release_idle_scratch()
   {
     bool freed = false;
@@ -320,6 +323,17 @@ struct Scheduler::State {
         release(e.counts);
       }
       release(other.keep);
+      // What a pass yet to run this run will emit holds the last run's items, which
+      // nothing reads before it; it comes back at its size when the pass runs.
+      if (running && !other.ran)
+        for (StreamId s : other.spec->emits) {
+          auto& st = state(s);
+          if (!st.buffer) continue;
+          st.released = std::max(st.released, st.capacity);
+          st.buffer = Buffer();
+          st.capacity = 0;
+          freed = true;
+        }
       if (auto& l = other.list) {
         release(l->state);
         for (auto& list : l->lists) release(list);
@@ -569,6 +583,7 @@ struct Scheduler::State {
 
   void execute(PassState& p, Redo redo)
   {
+    p.ran = true;
     std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     for (StreamId s : p.spec->also_over) n += state(s).count;
     const std::size_t wg = context.work_group_size();
@@ -599,6 +614,11 @@ struct Scheduler::State {
       // Lock-free: the next run tries small segments again.
       if (p.mode == Registration::global_atomic)
         for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(e);
+      for (auto& e : p.emitters) {
+        auto& st = state(e.stream);
+        if (st.released > st.capacity && !hands_over(p, e)) with_memory([&] { grow(e.stream, st.released, false); });
+        st.released = 0;
+      }
       if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
       // Without segments to hand over, the output needs its own buffer: as large as the
       // input, a first guess that saves a rerun where the output is about its size.
@@ -687,6 +707,7 @@ struct Scheduler::State {
       in.count = 0;
       in.known = true;
       in.handed_to = spec(e.stream).name;
+      p.handed_over = true;
       if (e.segments > 0) merge_segments(p, e);
     }
   }
@@ -749,11 +770,15 @@ struct Scheduler::State {
       const bool before = std::any_of(stage.begin(), at, [&](PassState* p) {
         return std::find(overflowing.begin(), overflowing.end(), p) != overflowing.end();
       });
+      flush_failure = SIZE_MAX;
       const bool gone = std::any_of(at + 1, stage.end(), [&](PassState* p) {
         return std::find(packed.begin(), packed.end(), p) != packed.end() &&
                std::any_of(p->emitters.begin(), p->emitters.end(), [&](const EmitterState& e) { return hands_over(*p, e); });
       });
-      flush_failure = before || gone ? SIZE_MAX : std::size_t(q - passes.data());
+      if (before || gone) return;
+      // The passes before it are done, and the run goes on after them.
+      finish(std::vector<PassState*>(stage.begin(), at));
+      flush_failure = std::size_t(q - passes.data());
     };
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
@@ -814,11 +839,17 @@ struct Scheduler::State {
         throw;
       }
     }
-    for (PassState* p : stage)
+    finish(stage);
+  }
+
+  // Passes whose outputs are all in their streams, as the counters read last say.
+  void finish(const std::vector<PassState*>& done)
+  {
+    for (PassState* p : done)
       if (p->mode == Registration::segmented_lock)
         for (auto& e : p->emitters) adopt_plan(e);
-    give_back_segments(stage);
-    for (PassState* p : stage)
+    give_back_segments(done);
+    for (PassState* p : done)
       for (StreamId s : pass_outputs(*p->spec))
         if (spec(s).variable) {
           state(s).count = host_counters[state(s).slot];
@@ -859,6 +890,8 @@ struct Scheduler::State {
     for (auto& p : passes) {
       p.stats = PassStats{p.spec->name};
       p.atomic_this_run = false;
+      p.handed_over = false;
+      p.ran = false;
       if (p.list) p.list->settled = false;
       for (auto& e : p.emitters) e.segment_bytes = 0;
     }
@@ -879,8 +912,14 @@ struct Scheduler::State {
     // allocations between runs may take it.
     struct Idle {
       std::vector<const PassState*>& busy;
-      ~Idle() { busy.clear(); }
-    } idle{busy};
+      bool& running;
+      ~Idle()
+      {
+        busy.clear();
+        running = false;
+      }
+    } idle{busy, running};
+    running = true;
     for (auto& st : streams) {
       st.earlier = 0;
       st.partial = false;
@@ -896,9 +935,11 @@ struct Scheduler::State {
     }
     if (!failure) failure = end_stage(stage);
     if (failure.pass != SIZE_MAX) {
-      if (failure.error && !sliceable(failure.pass)) std::rethrow_exception(failure.error);
-      if (failure.error) slices = 1;
-      sliced_pass = failure.pass;
+      if (failure.error) {
+        sliced_pass = slice_start(failure.pass);
+        if (sliced_pass == SIZE_MAX) std::rethrow_exception(failure.error);
+        slices = 1;
+      }
       run_in_slices(sliced_pass);
     }
     keep_needed_segments();
@@ -958,21 +999,39 @@ struct Scheduler::State {
     return {};
   }
 
+  bool running = false;  // within run()
   // The pass that runs in slices (SIZE_MAX: none) and into how many.
   std::size_t sliced_pass = SIZE_MAX;
   unsigned slices = 1;
+  std::size_t slices_left = 0;  // after the one running
   std::size_t flush_failure = SIZE_MAX;  // the pass whose output a flush had no memory for, if slices may start there
-  std::size_t slices_left = 0;      // after the one running
 
-  // Only a pass over one stream can be sliced; a culled stream would be compacted
-  // slice by slice over what the stream gathered before.
+  // Only a pass over one stream can be sliced, and only where it reads that stream alone
+  // from there on (another pass would see a slice where it expects the stream); a
+  // culled stream would be compacted slice by slice over what it gathered before.
   bool sliceable(std::size_t first) const
   {
     const PassSpec& head = *passes[first].spec;
     if (!head.launches_over_stream() || !head.also_over.empty() || head.culls()) return false;
-    for (std::size_t j = first + 1; j < passes.size(); ++j)
+    for (std::size_t j = first + 1; j < passes.size(); ++j) {
+      const auto& ins = passes[j].inputs;
+      if (std::find(ins.begin(), ins.end(), head.over) != ins.end()) return false;
       if (passes[j].spec->culls() && spec(passes[j].spec->cull_target).gathered) return false;
+    }
     return true;
+  }
+
+  // Where slices start when pass `failed` finds no room: there, or where it cannot be
+  // sliced (a culling pass), at the nearest pass before it that can and that may run
+  // again (no pass from there on has packed an output into its input's buffer), so
+  // that smaller slices of that pass's work leave it room. SIZE_MAX: nowhere.
+  std::size_t slice_start(std::size_t failed) const
+  {
+    for (std::size_t p = failed + 1; p-- > 0;) {
+      if (passes[p].handed_over) return SIZE_MAX;
+      if (sliceable(p)) return p;
+    }
+    return SIZE_MAX;
   }
 
   // Items a slice of `total` holds when the run goes in `slices` slices: a multiple of
@@ -1044,7 +1103,7 @@ struct Scheduler::State {
         const StreamId s{std::uint32_t(i)};
         auto& st = streams[i];
         if (!sliced[i] || !spec(s).variable || spec(s).gathered != gathered) continue;
-        st.base = st.earlier = 0;
+        st.base = st.earlier = st.released = 0;
         const std::size_t share = grown(gathered ? st.run_items : st.run_items / std::max<std::size_t>(count, 1));
         if (gathered ? st.capacity < st.run_items : st.capacity > share) grow(s, share, false);
       }
@@ -1097,7 +1156,7 @@ struct Scheduler::State {
         else if (begin + n < total) streams[i].earlier += streams[i].count;
       }
     }
-    stats.slices = unsigned((total + size - 1) / std::max<std::size_t>(size, 1));
+    stats.slices = unsigned(count);
     for (std::size_t i = 0; i < streams.size(); ++i)
       streams[i].partial = stats.slices > 1 && sliced[i] && !spec(StreamId{std::uint32_t(i)}).gathered;
     stats.sliced_pass = passes[first].spec->name;

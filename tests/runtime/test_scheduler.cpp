@@ -328,6 +328,81 @@ TEST_CASE("under any memory limit a stage either fits, giving back scratch, or f
   CHECK(fitted > 0);
 }
 
+TEST_CASE("short of memory for what a pass emits, it runs in slices of its input and gathers what the graph asks for",
+          "[runtime][scheduler][quick]")
+{
+  // values -> (expand) pairs -> (split) even + odd, with squares written beside. Only
+  // `even` is gathered; `odd`, the larger output, is what slices share out.
+  const std::size_t n = 60000;
+  StreamGraph g;
+  const auto values = g.fixed("values", 4, n), squares = g.fixed("squares", 4, n);
+  const auto pairs = g.variable("pairs", 8, 16), even = g.variable("even", 4, 16), odd = g.variable("odd", 16, 16);
+  g.gather(even);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  g.pass("square", {program, "test_square"})
+      .launch_over(values)
+      .write(squares)
+      .arg(buffer_of(values))
+      .arg(count_of(values))
+      .arg(buffer_of(squares));
+  g.pass("split", {program, "test_split"})
+      .launch_over(pairs)
+      .read(squares)
+      .emit(even)
+      .emit(odd)
+      .arg(buffer_of(pairs))
+      .arg(count_of(pairs))
+      .arg(buffer_of(squares));
+  const auto v = random_values(n, 11);
+  const auto expected = cstreams::test::reference(v);
+  // split's input is every pair (the reference culls some first).
+  std::vector<std::uint32_t> expected_even;
+  std::size_t expected_odd = 0;
+  for (const auto& p : expected.pairs) {
+    const std::uint32_t sq = v[p[0]] * v[p[0]];
+    if ((sq + p[1]) % 2u == 0u) expected_even.push_back(sq + p[1]);
+    else expected_odd += p[1] % 3u + 1u;
+  }
+  std::size_t floor = 0;
+  {
+    Context own(filter_from_environment());
+    own.programs().add_sources(test_kernel_sources());
+    Scheduler atomic(own, g, {Registration::global_atomic, true});
+    atomic.upload(values, v);
+    for (int frame = 0; frame < 2; ++frame) atomic.run();
+    CHECK(atomic.stats().slices == 1);
+    CHECK(sorted(atomic.download<std::uint32_t>(even)) == sorted(expected_even));
+    CHECK(atomic.count(odd) == expected_odd);
+    floor = own.memory_high_water();
+  }
+  const std::size_t odd_bytes = expected_odd * 16;
+  REQUIRE(odd_bytes < floor);
+
+  for (const double share : {0.5, 0.75}) {
+    Context limited(filter_from_environment());
+    limited.programs().add_sources(test_kernel_sources());
+    const std::size_t limit = floor - std::size_t(share * double(odd_bytes));
+    limited.set_memory_limit(limit);
+    INFO("limit " << limit << ", the global counter's peak " << floor << ", odd items " << odd_bytes << " bytes");
+    Scheduler s(limited, g, {Registration::segmented_lock, true});
+    s.upload(values, v);
+    // The second run starts in as many slices as the first ended with.
+    for (int frame = 0; frame < 2; ++frame) {
+      s.run();
+      const RunStats& stats = s.stats();
+      CHECK(stats.slices > 1);
+      CHECK(stats.sliced_pass == "split");
+      CHECK(limited.memory_high_water() <= limit);
+      CHECK(sorted(s.download<std::uint32_t>(even)) == sorted(expected_even));
+      // The pairs were emitted before the slices, whole; odd holds the last slice's.
+      CHECK(sorted(s.download<Pair>(pairs)) == sorted(expected.pairs));
+      CHECK(s.count(odd) < expected_odd);
+      CHECK(stats.streams[odd.index].items == expected_odd);
+      CHECK_THROWS_WITH(s.download<Quad>(odd), Catch::Contains("slices") && Catch::Contains("gather"));
+    }
+  }
+}
+
 TEST_CASE("passes update a fixed stream in place, in declaration order, before its readers", "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();

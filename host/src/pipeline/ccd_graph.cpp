@@ -399,8 +399,8 @@ struct GraphBuilder {
     }
   }
 
-  // The front update (or search from fixed seeds) down to triangle pairs, their
-  // decomposition into feature pairs, and the culls of the orphan pairs.
+  // The culls of the orphan pairs, then the front update (or search from fixed seeds)
+  // down to triangle pairs and their decomposition into feature pairs.
   void broad_phase(std::size_t front_size, bool bounded_loops)
   {
     using namespace runtime;
@@ -424,6 +424,25 @@ struct GraphBuilder {
     s.triangle_pairs = g.variable("triangle pairs", 8, guess);
     s.vf = g.variable("vf candidates", 8, guess);
     s.ee = g.variable("ee candidates", 8, guess);
+    // The orphan pairs' culls need no front: they go first, before the front update and
+    // what it emits take the device's memory.
+    auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, StreamId first,
+                            StreamId second, StreamId& pairs, StreamId& kept) {
+      if (count == 0) return;
+      pairs = g.fixed(name, 8, count);
+      kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
+      g.pass(std::string("cull ") + name, {program, "cs_cull_pairs", front_option})
+          .launch_over(pairs)
+          .cull(pairs, kept)
+          .arg(buffer_of(pairs))
+          .arg(count_of(pairs))
+          .arg(buffer_of(first))
+          .arg(buffer_of(second));
+    };
+    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), s.vertex_boxes, s.face_boxes, s.orphan_vf,
+                 s.kept_vf);
+    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), s.edge_boxes, s.edge_boxes, s.orphan_ee,
+                 s.kept_ee);
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
                        .launch_over(s.front)
                        .read(s.node_boxes)
@@ -455,23 +474,6 @@ struct GraphBuilder {
         .arg(buffer_of(s.vertex_boxes))
         .arg(buffer_of(s.edge_boxes))
         .arg(buffer_of(s.face_boxes));
-    auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, StreamId first,
-                            StreamId second, StreamId& pairs, StreamId& kept) {
-      if (count == 0) return;
-      pairs = g.fixed(name, 8, count);
-      kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
-      g.pass(std::string("cull ") + name, {program, "cs_cull_pairs", front_option})
-          .launch_over(pairs)
-          .cull(pairs, kept)
-          .arg(buffer_of(pairs))
-          .arg(count_of(pairs))
-          .arg(buffer_of(first))
-          .arg(buffer_of(second));
-    };
-    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), s.vertex_boxes, s.face_boxes, s.orphan_vf,
-                 s.kept_vf);
-    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), s.edge_boxes, s.edge_boxes, s.orphan_ee,
-                 s.kept_ee);
   }
 
   // The elementary tests of every candidate stream, each emitting its contacts.
