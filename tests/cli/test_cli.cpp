@@ -248,6 +248,29 @@ TEST_CASE("run --memory-budget keeps the step under the budget with the same con
     CHECK(text(csv) == text(dir / "free.csv"));
   }
 
+  // Below that, passes run in slices where they must: each budget runs with the same
+  // contacts or fails naming the allocation, and some run in slices.
+  unsigned sliced = 0;
+  for (double share : {-0.2, -0.4, -0.6, -0.8}) {
+    const double budget_mb = (double(floor) + share * double(peak - floor)) / (1 << 20);
+    const fs::path json = dir / "sliced.json", csv = dir / "sliced.csv";
+    INFO("budget " << budget_mb << " MiB, peak " << peak << " bytes, global counter's peak " << floor);
+    try {
+      execute({"run", a, b, "--memory-budget", std::to_string(budget_mb), "--json", json.string(), "--out", csv.string()});
+    } catch (const std::exception& e) {
+      CHECK_THAT(e.what(), Catch::Contains("allocating"));
+      continue;
+    }
+    const auto j = nlohmann::json::parse(std::ifstream(json));
+    if (j["steps"][0]["slices"].get<unsigned>() > 1) {
+      ++sliced;
+      CHECK_FALSE(j["steps"][0]["sliced_pass"].get<std::string>().empty());
+    }
+    CHECK(j["peak_bytes"].get<double>() <= budget_mb * (1 << 20));
+    CHECK(text(csv) == text(dir / "free.csv"));
+  }
+  CHECK(sliced > 0);
+
   // Far below what the streams need: an error naming the allocation, and no output.
   const fs::path csv = dir / "tiny.csv";
   CHECK_THROWS_WITH(execute({"run", a, b, "--memory-budget", "0.01", "--out", csv.string()}),

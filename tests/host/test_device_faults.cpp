@@ -103,9 +103,9 @@ TEST_CASE("a kernel that fails to build is named with its log, and the context b
 }
 
 // The most the device held during any of three steps of a detector on its own context,
-// and the last step's contacts.
+// and the last step's contacts and candidates.
 std::size_t peak_over_steps(const Scene& scene, const Step& step, const DetectorOptions& options,
-                            std::vector<Contact>& contacts)
+                            std::vector<Contact>& contacts, Candidates* candidates = nullptr)
 {
   runtime::Context context(filter_from_environment());
   Detector detector(context, describe(scene, 0), options);
@@ -114,6 +114,7 @@ std::size_t peak_over_steps(const Scene& scene, const Step& step, const Detector
     contacts = step_contacts(detector, step);
     peak = std::max(peak, detector.stats().peak_bytes);
   }
+  if (candidates) *candidates = detector.candidates();
   return peak;
 }
 
@@ -127,7 +128,8 @@ TEST_CASE("a step that runs short of memory gives back registration segments and
   tiny.solver.solver = GENERATE(Solver::cubic, Solver::conservative);
   INFO("solver " << to_string(tiny.solver.solver));
   std::vector<Contact> expected, atomic_contacts;
-  const std::size_t peak = peak_over_steps(scene, step, tiny, expected);
+  Candidates expected_candidates;
+  const std::size_t peak = peak_over_steps(scene, step, tiny, expected, &expected_candidates);
   REQUIRE(!expected.empty());
   // Registering every pass through the global counter needs no segments: the least a
   // step can run in without batches.
@@ -166,6 +168,14 @@ TEST_CASE("a step that runs short of memory gives back registration segments and
       CHECK(same(got, expected));
       CHECK(detector.stats().peak_bytes <= limit);
       if (detector.stats().run.slices > 1) ++sliced;
+      // Candidates that went slice by slice were not kept: asking for them is an error.
+      try {
+        const Candidates candidates = detector.candidates();
+        CHECK(candidates == expected_candidates);
+      } catch (const runtime::Error& e) {
+        CHECK(detector.stats().run.slices > 1);
+        CHECK_THAT(e.what(), Catch::Contains("slices"));
+      }
     }
     CHECK((larger_ran || !ran));
     larger_ran = ran;
