@@ -20,6 +20,28 @@ namespace {
 
 const char* const program = "kernels/stream_test.cl";
 
+PassSpec& add_square(StreamGraph& g, StreamId values, StreamId squares)
+{
+  return g.pass("square", {program, "test_square"})
+      .launch_over(values)
+      .write(squares)
+      .arg(buffer_of(values))
+      .arg(count_of(values))
+      .arg(buffer_of(squares));
+}
+
+PassSpec& add_split(StreamGraph& g, StreamId pairs, StreamId squares, StreamId even, StreamId odd)
+{
+  return g.pass("split", {program, "test_split"})
+      .launch_over(pairs)
+      .read(squares)
+      .emit(even)
+      .emit(odd)
+      .arg(buffer_of(pairs))
+      .arg(count_of(pairs))
+      .arg(buffer_of(squares));
+}
+
 // values -> (square) squares;  values -> (expand) pairs -> (cull) kept -> (split) even + odd.
 // `split` reads the variable stream `kept`, so the scheduler must end a stage before it.
 struct TestGraph {
@@ -35,25 +57,13 @@ struct TestGraph {
     even = graph.variable("even", 4, capacity);
     odd = graph.variable("odd", 16, capacity);
     // Declared out of order on purpose: the scheduler must put split last.
-    graph.pass("split", {program, "test_split"})
-        .launch_over(kept)
-        .read(squares)
-        .emit(even)
-        .emit(odd)
-        .arg(buffer_of(kept))
-        .arg(count_of(kept))
-        .arg(buffer_of(squares));
+    add_split(graph, kept, squares, even, odd);
     graph.pass("expand", {program, "test_expand"})
         .launch_over(values)
         .emit(pairs)
         .arg(buffer_of(values))
         .arg(count_of(values));
-    graph.pass("square", {program, "test_square"})
-        .launch_over(values)
-        .write(squares)
-        .arg(buffer_of(values))
-        .arg(count_of(values))
-        .arg(buffer_of(squares));
+    add_square(graph, values, squares);
     graph.pass("cull", {program, "test_keep"}).launch_over(pairs).cull(pairs, kept).arg(buffer_of(pairs)).arg(count_of(pairs));
   }
 };
@@ -64,6 +74,20 @@ std::vector<std::uint32_t> random_values(std::size_t n, std::uint32_t seed)
   std::vector<std::uint32_t> v(n);
   for (auto& x : v) x = rng();
   return v;
+}
+
+// The most memory a run of `g` holds (twice, from `values`) on a context of its own,
+// every pass registering through the global counter; `check` sees the scheduler after.
+template <class Check>
+std::size_t global_counter_peak(const StreamGraph& g, StreamId values, const std::vector<std::uint32_t>& v, Check check)
+{
+  Context own(filter_from_environment());
+  own.programs().add_sources(test_kernel_sources());
+  Scheduler atomic(own, g, {Registration::global_atomic, true});
+  atomic.upload(values, v);
+  for (int frame = 0; frame < 2; ++frame) atomic.run();
+  check(atomic);
+  return own.memory_high_water();
 }
 
 template <class T> std::vector<T> sorted(std::vector<T> v)
@@ -294,15 +318,7 @@ TEST_CASE("under any memory limit a stage either fits, giving back scratch, or f
   std::size_t streams = 0;
   for (const auto& stream : reference.stats().streams) streams += stream.bytes;
   const std::size_t total = streams + reference.stats().scratch_bytes;
-  std::size_t floor = 0;
-  {
-    Context own(filter_from_environment());
-    own.programs().add_sources(test_kernel_sources());
-    Scheduler atomic(own, g, {Registration::global_atomic, true});
-    atomic.upload(values, v);
-    for (int frame = 0; frame < 2; ++frame) atomic.run();
-    floor = own.memory_high_water();
-  }
+  const std::size_t floor = global_counter_peak(g, values, v, [](const Scheduler&) {});
   REQUIRE(floor < total);
 
   unsigned fitted = 0;
@@ -339,20 +355,8 @@ TEST_CASE("short of memory for what a pass emits, it runs in slices of its input
   const auto pairs = g.variable("pairs", 8, 16), even = g.variable("even", 4, 16), odd = g.variable("odd", 16, 16);
   g.gather(even);
   g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
-  g.pass("square", {program, "test_square"})
-      .launch_over(values)
-      .write(squares)
-      .arg(buffer_of(values))
-      .arg(count_of(values))
-      .arg(buffer_of(squares));
-  g.pass("split", {program, "test_split"})
-      .launch_over(pairs)
-      .read(squares)
-      .emit(even)
-      .emit(odd)
-      .arg(buffer_of(pairs))
-      .arg(count_of(pairs))
-      .arg(buffer_of(squares));
+  add_square(g, values, squares);
+  add_split(g, pairs, squares, even, odd);
   const auto v = random_values(n, 11);
   const auto expected = cstreams::test::reference(v);
   // split's input is every pair (the reference culls some first).
@@ -363,18 +367,11 @@ TEST_CASE("short of memory for what a pass emits, it runs in slices of its input
     if ((sq + p[1]) % 2u == 0u) expected_even.push_back(sq + p[1]);
     else expected_odd += p[1] % 3u + 1u;
   }
-  std::size_t floor = 0;
-  {
-    Context own(filter_from_environment());
-    own.programs().add_sources(test_kernel_sources());
-    Scheduler atomic(own, g, {Registration::global_atomic, true});
-    atomic.upload(values, v);
-    for (int frame = 0; frame < 2; ++frame) atomic.run();
+  const std::size_t floor = global_counter_peak(g, values, v, [&](const Scheduler& atomic) {
     CHECK(atomic.stats().slices == 1);
     CHECK(sorted(atomic.download<std::uint32_t>(even)) == sorted(expected_even));
     CHECK(atomic.count(odd) == expected_odd);
-    floor = own.memory_high_water();
-  }
+  });
   const std::size_t odd_bytes = expected_odd * 16;
   REQUIRE(odd_bytes < floor);
 

@@ -72,7 +72,8 @@ struct RunStats {
 // count only there. Streams marked StreamGraph::gather collect every slice's items;
 // other outputs of the sliced passes hold the last slice's. Slices double until one
 // fits; a scheduler keeps its number of slices for the runs after, so that a step
-// under a memory budget does not fail first each time.
+// under a memory budget does not fail first each time. A slice's work-items count from
+// 0, so a pass that may be sliced emits what it reads, not its position in its input.
 class Scheduler {
 public:
   Scheduler(Context& context, StreamGraph graph, SchedulerOptions options = {});
