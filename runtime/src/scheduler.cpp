@@ -765,16 +765,14 @@ struct Scheduler::State {
     std::vector<PassState*> packed, overflowing;
     // Short of memory for a pass's output, where the stage's other passes are done or
     // can run again, the run may go on in slices from that pass (run_in_slices).
+    // Not where a pass before it still overflows (it would not run again), nor where a
+    // pass after it has handed its input's buffer over (it could not).
     const auto out_of_memory = [&](PassState* q) {
       const auto at = std::find(stage.begin(), stage.end(), q);
       const bool before = std::any_of(stage.begin(), at, [&](PassState* p) {
         return std::find(overflowing.begin(), overflowing.end(), p) != overflowing.end();
       });
-      flush_failure = SIZE_MAX;
-      const bool gone = std::any_of(at + 1, stage.end(), [&](PassState* p) {
-        return std::find(packed.begin(), packed.end(), p) != packed.end() &&
-               std::any_of(p->emitters.begin(), p->emitters.end(), [&](const EmitterState& e) { return hands_over(*p, e); });
-      });
+      const bool gone = std::any_of(at + 1, stage.end(), [](const PassState* p) { return p->handed_over; });
       if (before || gone) return;
       // The passes before it are done, and the run goes on after them.
       finish(std::vector<PassState*>(stage.begin(), at));
@@ -788,10 +786,9 @@ struct Scheduler::State {
       // so they may go back if growing another pass's output runs short of memory.
       overflowing.clear();
       for (PassState* p : stage)
-        if (overflowed(*p)) overflowing.push_back(p);
-      for (PassState* p : stage)
-        if (std::find(overflowing.begin(), overflowing.end(), p) == overflowing.end() &&
-            std::find(packed.begin(), packed.end(), p) == packed.end()) {
+        if (overflowed(*p)) {
+          overflowing.push_back(p);
+        } else if (std::find(packed.begin(), packed.end(), p) == packed.end()) {
           try {
             pack_handed_over(*p);
           } catch (const DeviceMemoryExhausted&) {
@@ -1067,11 +1064,15 @@ struct Scheduler::State {
       for (StreamId s : launched)
         if (!sliced[s.index] && s != over && std::find(once.begin(), once.end(), s) == once.end()) once.push_back(s);
     }
+    // The variable streams the sliced passes emit, whose counts go slice by slice.
+    std::vector<StreamId> outputs;
+    for (std::uint32_t i = 0; i < streams.size(); ++i)
+      if (sliced[i] && spec(StreamId{i}).variable) outputs.push_back(StreamId{i});
     slices = std::max(slices, 2u);
     for (;;) {
       const std::size_t size = slice_items(over, state(over).count);
       try {
-        run_slices(first, every_slice, sliced, once, size);
+        run_slices(first, every_slice, outputs, once, size);
         return;
       } catch (const DeviceMemoryExhausted&) {
         if (size <= slice_items(over, 0) || slices >= (1u << 30)) throw;
@@ -1080,7 +1081,7 @@ struct Scheduler::State {
     }
   }
 
-  void run_slices(std::size_t first, const std::vector<bool>& every_slice, const std::vector<bool>& sliced,
+  void run_slices(std::size_t first, const std::vector<bool>& every_slice, const std::vector<StreamId>& outputs,
                   const std::vector<StreamId>& once, std::size_t size)
   {
     const StreamId over = passes[first].spec->over;
@@ -1095,14 +1096,13 @@ struct Scheduler::State {
         // A slice's work list is sized by the slice, not by what the whole input needed.
         if (passes[j].list) passes[j].list->released = 0;
       }
-    const std::size_t total = state(over).count, count = (total + size - 1) / std::max<std::size_t>(size, 1);
+    const std::size_t total = state(over).count, count = std::max<std::size_t>(1, (total + size - 1) / size);
     // A gathered stream takes what the last run gathered at once, instead of growing
     // slice by slice with its items held twice.
     for (const bool gathered : {false, true})
-      for (std::size_t i = 0; i < streams.size(); ++i) {
-        const StreamId s{std::uint32_t(i)};
-        auto& st = streams[i];
-        if (!sliced[i] || !spec(s).variable || spec(s).gathered != gathered) continue;
+      for (StreamId s : outputs) {
+        auto& st = state(s);
+        if (spec(s).gathered != gathered) continue;
         st.base = st.earlier = st.released = 0;
         const std::size_t share = grown(gathered ? st.run_items : st.run_items / std::max<std::size_t>(count, 1));
         if (gathered ? st.capacity < st.run_items : st.capacity > share) grow(s, share, false);
@@ -1150,15 +1150,14 @@ struct Scheduler::State {
         if (k == 0 || every_slice[j]) failure = step(passes[j], stage);
       if (!failure) failure = end_stage(stage);
       if (failure) std::rethrow_exception(failure.error);
-      for (std::size_t i = 0; i < streams.size(); ++i) {
-        if (!sliced[i] || !spec(StreamId{std::uint32_t(i)}).variable) continue;
-        if (spec(StreamId{std::uint32_t(i)}).gathered) streams[i].base = streams[i].count;
-        else if (begin + n < total) streams[i].earlier += streams[i].count;
+      for (StreamId s : outputs) {
+        auto& st = state(s);
+        if (spec(s).gathered) st.base = st.count;
+        else if (begin + n < total) st.earlier += st.count;
       }
     }
     stats.slices = unsigned(count);
-    for (std::size_t i = 0; i < streams.size(); ++i)
-      streams[i].partial = stats.slices > 1 && sliced[i] && !spec(StreamId{std::uint32_t(i)}).gathered;
+    for (StreamId s : outputs) state(s).partial = stats.slices > 1 && !spec(s).gathered;
     stats.sliced_pass = passes[first].spec->name;
   }
 
