@@ -90,44 +90,54 @@ void Compactor::compact(const Buffer& src, std::size_t words, const Buffer& keep
   context_.launch(scatter_, n, context_.work_group_size(), timeline, label);
 }
 
-Sorter::Sorter(Context& context)
+namespace {
+std::size_t checked_record_words(std::size_t words)
+{
+  if (words == 0 || words > Sorter::max_words)
+    throw Error("sort: records of " + std::to_string(words) + " words; the sort takes 1 to " +
+                std::to_string(Sorter::max_words));
+  return words;
+}
+}  // namespace
+
+Sorter::Sorter(Context& context, std::size_t words)
     : context_(context),
-      blocks_(context.programs().kernel("runtime/sort.cl", "cs_sort_blocks")),
-      merge_(context.programs().kernel("runtime/sort.cl", "cs_merge_runs"))
+      words_(checked_record_words(words)),
+      blocks_(context.programs().kernel("runtime/sort.cl", "cs_sort_blocks", "-DCS_SORT_WORDS=" + std::to_string(words))),
+      merge_(context.programs().kernel("runtime/sort.cl", "cs_merge_runs", "-DCS_SORT_WORDS=" + std::to_string(words)))
 {
 }
 
-std::size_t Sorter::block_records(std::size_t words) const
+std::size_t Sorter::block_records() const
 {
   // Half the local memory at most, so that two groups can share a compute unit, and no
   // more than 16 KiB: longer blocks save a merge pass each but lengthen the network.
   const std::size_t bytes = std::min<std::size_t>(context_.device().local_memory / 2, 16384);
   std::size_t block = 1;
-  while (2 * block * words * sizeof(cl_uint) <= bytes) block *= 2;
+  while (2 * block * words_ * sizeof(cl_uint) <= bytes) block *= 2;
   return block >= 2 ? block : 0;
 }
 
-void Sorter::reserve(std::size_t n, std::size_t words)
+void Sorter::reserve(std::size_t n)
 {
   // Runs that fit one block sort in local memory and merge nothing.
-  if (n >= 2 && block_records(words) < n) ensure_capacity(context_, scratch_, n * words * sizeof(cl_uint), "sort scratch");
+  if (n >= 2 && block_records() < n) ensure_capacity(context_, scratch_, n * words_ * sizeof(cl_uint), "sort scratch");
 }
 
-const Buffer& Sorter::sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline,
-                           const char* label)
+const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timeline, const char* label)
 {
   if (n >= (std::size_t(1) << 31))
     throw Error(std::string(label) + ": " + std::to_string(n) + " records, the sort takes fewer than 2^31");
   if (n < 2) return records;
   const std::size_t wg = context_.work_group_size();
-  const std::size_t block = block_records(words);
+  const std::size_t block = block_records();
   if (block) {
-    blocks_.set_args(records, cl_uint(n), cl_uint(words), cl_uint(block));
-    blocks_.set_local(4, block * words * sizeof(cl_uint));
+    blocks_.set_args(records, cl_uint(n), cl_uint(block));
+    blocks_.set_local(3, block * words_ * sizeof(cl_uint));
     context_.launch(blocks_, (n + block - 1) / block * wg, wg, timeline, label);
   }
   if (block >= n) return records;
-  reserve(n, words);
+  reserve(n);
   // A work-item writes this many records of a merged run; more would leave the GPU idle
   // in the last passes, fewer would repeat the binary searches.
   constexpr std::size_t chunk = 8;
@@ -135,7 +145,7 @@ const Buffer& Sorter::sort(const Buffer& records, std::size_t n, std::size_t wor
   const Buffer* out = &scratch_;
   for (std::size_t width = std::max<std::size_t>(block, 1); width < n; width *= 2) {
     const std::size_t c = std::min(chunk, 2 * width);
-    merge_.set_args(*in, *out, cl_uint(n), cl_uint(words), cl_uint(width), cl_uint(c));
+    merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(c));
     context_.launch(merge_, (n + c - 1) / c, wg, timeline, label);
     std::swap(in, out);
   }

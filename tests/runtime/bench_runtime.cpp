@@ -9,10 +9,13 @@
 #include <cstreams/runtime/error.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
+#include <cstreams/runtime/timeline.hpp>
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cstring>
 #include <chrono>
 #include <cstdio>
 #include <functional>
@@ -50,7 +53,7 @@ void require(bool ok, const std::string& what)
 
 int main(int argc, char** argv)
 try {
-  CLI::App app{"cstreams runtime benchmark: scan, compaction and stream registration"};
+  CLI::App app{"cstreams runtime benchmark: scan, compaction, sort and stream registration"};
   std::vector<std::size_t> sizes{1'000'000, 4'000'000, 16'000'000};
   int repeat = 15;
   app.add_option("--sizes", sizes, "item counts")->delimiter(',');
@@ -109,6 +112,47 @@ try {
     require(boost_kept == odd, "Boost.Compute copy_if kept the wrong number of items");
     row("compaction", "cstreams (flag+scan)", n, odd, compact_ours);
     row("compaction", "Boost.Compute copy_if", n, odd, compact_boost);
+
+    // Records shaped like contacts (contacts.cl): two small object words, four vertex
+    // ids and a time. The block sort and the merge passes are timed apart (device time).
+    {
+      constexpr std::size_t words = 8;
+      std::vector<cl_uint> records(n * words);
+      for (std::size_t i = 0; i < n; ++i) {
+        cl_uint* r = &records[i * words];
+        r[0] = rng() % 2;
+        r[1] = r[0] + rng() % 2;
+        for (std::size_t w = 2; w < words; ++w) r[w] = rng() % (w < 6 ? 1'000'000 : 0xffffffffu);
+      }
+      Buffer unsorted(ctx, records.size() * 4, "records"), sorting(ctx, records.size() * 4, "sorting");
+      ctx.write(unsorted, records.data(), records.size() * 4);
+      Sorter sorter(ctx, words);
+      std::vector<double> blocks_ms, merges_ms;
+      const Buffer* sorted = nullptr;
+      const double ms = median_ms(repeat, [&] {
+        ctx.copy(unsorted, sorting, records.size() * 4);
+        Timeline timeline;
+        sorted = &sorter.sort(sorting, n, &timeline);
+        const auto entries = timeline.resolve();
+        blocks_ms.push_back(entries.empty() ? 0 : entries.front().nanoseconds * 1e-6);
+        double merges = 0;
+        for (std::size_t e = 1; e < entries.size(); ++e) merges += entries[e].nanoseconds * 1e-6;
+        merges_ms.push_back(merges);
+      });
+      std::vector<cl_uint> back(records.size());
+      ctx.read(*sorted, back.data(), back.size() * 4);
+      std::vector<std::array<cl_uint, words>> expected(n);
+      std::memcpy(expected.data(), records.data(), records.size() * 4);
+      std::sort(expected.begin(), expected.end());
+      require(std::memcmp(expected.data(), back.data(), back.size() * 4) == 0, "sorted records differ from the host's sort");
+      auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        return v[v.size() / 2];
+      };
+      row("sort 8 words", "cstreams (wall)", n, n, ms);
+      row("sort 8 words", "block sort (device)", n, n, median(blocks_ms));
+      row("sort 8 words", "merge passes (device)", n, n, median(merges_ms));
+    }
 
     for (auto registration : {Registration::global_atomic, Registration::segmented_lock, Registration::lock_free}) {
       StreamGraph g;

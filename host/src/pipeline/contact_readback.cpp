@@ -41,7 +41,7 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
     : context_(context),
       double_time_(precision == Precision::double_),
       make_records_(context.programs().kernel("ccd/contacts.cl", "cs_contact_records")),
-      sorter_(context)
+      sorter_(context, record_words)
 {
   std::vector<cl_uint> first_vertex(scene.objects.size());
   for (std::size_t o = 0; o < first_vertex.size(); ++o) first_vertex[o] = layout.slots[layout.slot_of[o]].first_vertex;
@@ -61,7 +61,7 @@ void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& stre
   runtime::allocate_making_room(
       [&] {
         runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
-        sorter_.reserve(n, record_words);
+        sorter_.reserve(n);
       },
       [&] { return scheduler.release_idle_scratch(); });
   runtime::Timeline timeline;
@@ -76,7 +76,7 @@ void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& stre
     context_.launch(make_records_, count, context_.work_group_size(), events, stats.name);
     first += count;
   }
-  const runtime::Buffer& sorted = sorter_.sort(records_, n, record_words, events, stats.name.c_str());
+  const runtime::Buffer& sorted = sorter_.sort(records_, n, events, stats.name.c_str());
   stats.launches = unsigned(context_.kernel_launches() - launches);
   const std::size_t bytes = n * record_words * sizeof(cl_uint);
   runtime::ensure_capacity(context_, staging_, bytes, "contact records");

@@ -62,27 +62,30 @@ private:
 // Sorts records of `words` 32-bit words, compared word by word as unsigned integers
 // (the first word most significant), on the device: blocks of a few hundred records in
 // local memory, then merge passes that each double the sorted runs, each linear in n.
-// Scratch for the passes is kept and only ever grows.
+// The kernels are built for one record length, which a record's words are held in
+// private memory; scratch for the passes is kept and only ever grows.
 class Sorter {
 public:
-  explicit Sorter(Context& context);
+  // Records of up to max_words words: longer ones would not fit a work-item's registers.
+  static constexpr std::size_t max_words = 16;
+  Sorter(Context& context, std::size_t words);
 
   // Sorts the first n records of `records` and returns the buffer that then holds them
   // in order: `records` itself or the sorter's scratch (valid until the next sort).
   // n must stay below 2^31.
-  const Buffer& sort(const Buffer& records, std::size_t n, std::size_t words, Timeline* timeline = nullptr,
-                     const char* label = "sort");
-  // Allocates the scratch that sorting n records of `words` words takes, so that a
-  // caller short of memory can make room before it sorts anything.
-  void reserve(std::size_t n, std::size_t words);
+  const Buffer& sort(const Buffer& records, std::size_t n, Timeline* timeline = nullptr, const char* label = "sort");
+  // Allocates the scratch that sorting n records takes, so that a caller short of
+  // memory can make room before it sorts anything.
+  void reserve(std::size_t n);
   std::size_t scratch_bytes() const { return scratch_.bytes(); }
 
 private:
   // Records a work-group sorts in local memory: a power of two, or 0 where fewer than
-  // two records of `words` words fit.
-  std::size_t block_records(std::size_t words) const;
+  // two records fit.
+  std::size_t block_records() const;
 
   Context& context_;
+  std::size_t words_;
   Kernel blocks_;
   Kernel merge_;
   Buffer scratch_;
