@@ -115,7 +115,10 @@ std::size_t Sorter::block_records() const
   const std::size_t bytes = std::min<std::size_t>(context_.device().local_memory / 2, 16384);
   std::size_t block = 1;
   while (2 * block * words_ * sizeof(cl_uint) <= bytes) block *= 2;
-  return block >= 2 ? block : 0;
+  if (block < 2)
+    throw Error("sort: device " + context_.device().name + " has too little local memory for two records of " +
+                std::to_string(words_) + " words");
+  return block;
 }
 
 void Sorter::reserve(std::size_t n)
@@ -131,22 +134,18 @@ const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timel
   if (n < 2) return records;
   const std::size_t wg = context_.work_group_size();
   const std::size_t block = block_records();
-  if (block) {
-    blocks_.set_args(records, cl_uint(n), cl_uint(block));
-    blocks_.set_local(3, block * words_ * sizeof(cl_uint));
-    context_.launch(blocks_, (n + block - 1) / block * wg, wg, timeline, label);
-  }
+  const std::size_t groups = (n + block - 1) / block;
+  blocks_.set_args(records, cl_uint(n), cl_uint(block));
+  blocks_.set_local(3, block * words_ * sizeof(cl_uint));
+  context_.launch(blocks_, groups * wg, wg, timeline, label);
   if (block >= n) return records;
   reserve(n);
-  // A work-item writes this many records of a merged run; more would leave the GPU idle
-  // in the last passes, fewer would repeat the binary searches.
-  constexpr std::size_t chunk = 8;
   const Buffer* in = &records;
   const Buffer* out = &scratch_;
-  for (std::size_t width = std::max<std::size_t>(block, 1); width < n; width *= 2) {
-    const std::size_t c = std::min(chunk, 2 * width);
-    merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(c));
-    context_.launch(merge_, (n + c - 1) / c, wg, timeline, label);
+  for (std::size_t width = block; width < n; width *= 2) {
+    merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(block));
+    merge_.set_local(5, block * words_ * sizeof(cl_uint));
+    context_.launch(merge_, groups * wg, wg, timeline, label);
     std::swap(in, out);
   }
   return *in;

@@ -77,9 +77,12 @@ void check_compaction(std::size_t n, std::size_t capacity_factor_percent)
   CHECK(count == kept);  // the count is exact even when the destination is too small
   CHECK(std::equal(result.begin(), result.end(), expected.begin()));
 }
+enum class Order { random, ascending, descending };
+
 // Records whose leading words repeat often, so that comparisons reach the later
-// words, and some records equal in every word.
-void check_sort(std::size_t n, std::size_t words)
+// words, and some records equal in every word. Records already in order, or in
+// reverse, make every tile of a merge come from one run alone.
+void check_sort(std::size_t n, std::size_t words, Order order = Order::random)
 {
   auto& ctx = cstreams::test::device();
   Sorter sorter(ctx, words);
@@ -87,6 +90,8 @@ void check_sort(std::size_t n, std::size_t words)
   const auto last_words = random_values(n, std::uint32_t(n) + 1, 0xffffffffu);
   for (std::size_t i = 0; i < n; ++i)
     if (i % 5 != 0) values[i * words + words - 1] = last_words[i];
+  if (order != Order::random)
+    for (std::size_t i = 0; i < n; ++i) values[i * words] = cl_uint(order == Order::ascending ? i : n - i);
   Buffer records(ctx, std::max<std::size_t>(n, 1) * words * 4, "records");
   ctx.write(records, values.data(), values.size() * 4);
   const Buffer& sorted = sorter.sort(records, n);
@@ -108,6 +113,8 @@ TEST_CASE("sorting records equals the host's sort at sizes 0, 1, 2^k-1, 2^k, 2^k
   for (std::size_t n : sizes_around_powers_of_two(std::size_t(1) << 13)) check_sort(n, 3);
   for (std::size_t words : {1, 2, 5, 8, 16}) check_sort(1000, words);
   check_sort(100000, 8);
+  check_sort(20000, 8, Order::ascending);
+  check_sort(20000, 8, Order::descending);
   REQUIRE_THROWS_WITH(Sorter(cstreams::test::device(), 17), Catch::Contains("records of 17 words"));
 }
 
