@@ -33,47 +33,29 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
   if (o < capacity) cs_copy_item(items, i, dst, o, words);
 }
 
-/* The segment holding slot i, where base(lo) <= i < base(hi). */
-inline uint cs_find_segment(__global const uint* plan, const uint planned, const uint fresh, const uint i, uint lo,
-                            uint hi)
-{
-  while (hi - lo > 1u) {
-    const uint mid = lo + (hi - lo) / 2u;
-    if (cs_segment_base(plan, planned, fresh, mid) <= i) lo = mid;
-    else hi = mid;
-  }
-  return lo;
-}
-
 /* Segmented-lock segments planned from the last run (cs_segment_base), then the spill
- * pool: one work-item per slot. A group's slots span few segments, so the group's first
- * and last work-items bisect all segments and the others only between what they found.
- * A spilled item's group and rank follow the counts. Work-item 0 also completes
- * `offsets` with the total at [segments], so that they plan the next run's segments. */
+ * pool: group g < segments copies segment g, the groups after them the spilled items,
+ * a work-item each. A segment holds about one emitting group's items, so a group starts
+ * from its segment's bounds alone; one work-item per slot would first search for its
+ * segment, a chain of dependent reads that held every group up. A spilled item's group
+ * and rank follow the counts. Work-item 0 also completes `offsets` with the total at
+ * [segments], so that they plan the next run's segments. */
 __kernel void cs_merge_planned(__global const uint* items, const uint words, __global const uint* counts,
                                __global uint* offsets, const uint segments, __global const uint* plan,
                                const uint planned, const uint fresh, __global const uint* counters,
                                const uint spill_slot, __global uint* dst, const uint capacity)
 {
-  __local uint range[2];
-  const uint i = (uint)get_global_id(0), lid = (uint)get_local_id(0), last = (uint)get_local_size(0) - 1u;
-  const uint pool = cs_segment_base(plan, planned, fresh, segments);
-  const uint first = i - lid;
-  if (lid == 0u) range[0] = first < pool ? cs_find_segment(plan, planned, fresh, first, 0u, segments) : 0u;
-  if (lid == last)
-    range[1] = first < pool ? cs_find_segment(plan, planned, fresh, min(first + last, pool - 1u), 0u, segments) + 1u : 1u;
-  barrier(CLK_LOCAL_MEM_FENCE);
-  if (i == 0u) offsets[segments] = offsets[segments - 1u] + counts[segments - 1u];
-  uint o;
-  if (i < pool) {
-    const uint s = cs_find_segment(plan, planned, fresh, i, range[0], range[1]);
-    const uint j = i - cs_segment_base(plan, planned, fresh, s);
-    if (j >= counts[s]) return;
-    o = offsets[s] + j;
+  const uint g = (uint)get_group_id(0), lid = (uint)get_local_id(0), size = (uint)get_local_size(0);
+  if (g == 0u && lid == 0u) offsets[segments] = offsets[segments - 1u] + counts[segments - 1u];
+  if (g < segments) {
+    const uint base = cs_segment_base(plan, planned, fresh, g);
+    const uint held = min(counts[g], cs_segment_base(plan, planned, fresh, g + 1u) - base), o = offsets[g];
+    for (uint j = lid; j < held; j += size)
+      if (o + j < capacity) cs_copy_item(items, base + j, dst, o + j, words);
   } else {
-    const uint k = i - pool;
+    const uint k = (g - segments) * size + lid;
     if (k >= min(counters[spill_slot], segments * CS_SPILL_PER_GROUP)) return;
-    o = offsets[counts[segments + 2u * k]] + counts[segments + 2u * k + 1u];
+    const uint o = offsets[counts[segments + 2u * k]] + counts[segments + 2u * k + 1u];
+    if (o < capacity) cs_copy_item(items, cs_segment_base(plan, planned, fresh, segments) + k, dst, o, words);
   }
-  if (o < capacity) cs_copy_item(items, i, dst, o, words);
 }

@@ -670,8 +670,9 @@ struct Scheduler::State {
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
                            cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
                            cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0));
-    context.launch(merge_planned, copy ? std::size_t(segment_items(e, e.segments)) : 1,
-                   context.work_group_size(), tl(), p.spec->name);
+    const std::size_t wg = context.work_group_size();
+    const std::size_t spill_groups = (e.segments * spill_per_group + wg - 1) / wg;
+    context.launch(merge_planned, copy ? (e.segments + spill_groups) * wg : 1, wg, tl(), p.spec->name);
   }
 
   // Whether this execution packs the emitter's items into the buffer of an input
