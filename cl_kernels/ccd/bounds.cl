@@ -2,6 +2,7 @@
  * BVH (nodes in breadth-first order: a level's nodes are contiguous and their
  * children lie in the next level). */
 #include "bounds.h"
+#include "runtime/common.h"
 
 inline void cs_swept_dop(__global const float* x0, __global const float* x1, const uint* vertices, const int count,
                          const float separation, __global float* out)
@@ -32,12 +33,9 @@ __kernel void cs_primitive_bounds(__global const float* x0, __global const float
 }
 
 /* nodes: (first child or -1, face or -1, parent, depth) per node. */
-__kernel void cs_refit_level(__global const int4* nodes, __global const float* face_boxes, const uint first,
-                             const uint count, __global float* node_boxes)
+inline void cs_refit_node(__global const int4* nodes, __global const float* face_boxes, const uint node,
+                          __global float* node_boxes)
 {
-  const uint i = get_global_id(0);
-  if (i >= count) return;
-  const uint node = first + i;
   const int left = nodes[node].x, face = nodes[node].y;
   __global float* out = node_boxes + (size_t)CS_DOP_FLOATS * node;
   if (left < 0) {
@@ -49,5 +47,27 @@ __kernel void cs_refit_level(__global const int4* nodes, __global const float* f
   for (int k = 0; k < 9; ++k) {
     out[k] = fmin(a[k], b[k]);
     out[9 + k] = fmax(a[9 + k], b[9 + k]);
+  }
+}
+
+__kernel void cs_refit_level(__global const int4* nodes, __global const float* face_boxes, const uint first,
+                             const uint count, __global float* node_boxes)
+{
+  const uint i = get_global_id(0);
+  if (i < count) cs_refit_node(nodes, face_boxes, first + i, node_boxes);
+}
+
+/* Levels `top` up to 0, deepest first, by one work-group: each of these levels holds
+ * too few nodes to be worth a launch of its own (a launch costs about as much as
+ * refitting a few hundred nodes). The barrier makes a level's boxes visible to the
+ * group before the level above reads them. levels: as SceneLayout::levels. */
+CS_GROUP_KERNEL void cs_refit_top_levels(__global const int4* nodes, __global const float* face_boxes,
+                                         __global const uint* levels, const uint top, __global float* node_boxes)
+{
+  for (uint level = top + 1; level-- > 0;) {
+    const uint end = levels[level + 1];
+    for (uint node = levels[level] + get_local_id(0); node < end; node += CS_WG_SIZE)
+      cs_refit_node(nodes, face_boxes, node, node_boxes);
+    barrier(CLK_GLOBAL_MEM_FENCE);
   }
 }

@@ -86,6 +86,48 @@ ObjectDescription ball(const std::string& name, const Vec3& centre, ObjectKind k
 
 }  // namespace
 
+// The levels the refit passes go over, in their order: "refit level k" is level k,
+// "refit levels 0-t" levels t down to 0.
+std::vector<std::size_t> refitted_levels(const runtime::StreamGraph& g)
+{
+  std::vector<std::size_t> levels;
+  for (const auto& p : g.passes()) {
+    if (p.name.rfind("refit levels 0-", 0) == 0)
+      for (std::size_t k = std::stoul(p.name.substr(15)) + 1; k-- > 0;) levels.push_back(k);
+    else if (p.name.rfind("refit level ", 0) == 0)
+      levels.push_back(std::stoul(p.name.substr(12)));
+  }
+  return levels;
+}
+
+std::vector<std::size_t> levels_up_from(std::size_t depth)
+{
+  std::vector<std::size_t> levels(depth);
+  for (std::size_t k = 0; k < depth; ++k) levels[k] = depth - 1 - k;
+  return levels;
+}
+
+TEST_CASE("the refit goes over every level once, deepest first, the small ones in one pass", "[detector][quick]")
+{
+  SceneDescription scene;
+  scene.add(ball("cloth", {0, 0, 0}, ObjectKind::deformable, true));
+  scene.add(ball("ball", {0.5, 0, 0}, ObjectKind::rigid, false));
+  const SceneLayout layout = make_layout(scene, 0);
+  for (std::size_t group : {1, 4, 64, 256}) {
+    GraphDevice device;
+    device.work_group_size = group;
+    const auto g = build_ccd_graph(layout, DetectorOptions{}, expand_front(layout, 64).size(), device);
+    INFO("work-group size " << group);
+    CHECK(refitted_levels(g.graph) == levels_up_from(layout.depth));
+    // Levels of up to four nodes a work-item go in the one pass, the others each in a pass.
+    std::size_t top = 0;
+    while (top < layout.depth && layout.levels[top + 1] - layout.levels[top] <= 4 * group) ++top;
+    const std::size_t passes = std::count_if(g.graph.passes().begin(), g.graph.passes().end(),
+                                             [](const auto& p) { return p.name.rfind("refit", 0) == 0; });
+    CHECK(passes == layout.depth - top + (top > 0));
+  }
+}
+
 TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
 {
   DetectorOptions options;
@@ -101,7 +143,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     const auto g = graph_of(scene);
     const auto passes = names(g.passes()), streams = names(g.streams());
     CHECK(contains(passes, "face bounds"));
-    CHECK(contains(passes, "refit level 0"));
+    CHECK(contains(passes, "refit levels 0-" + std::to_string(make_layout(scene, 0).depth - 1)));
     CHECK(contains(passes, "front update"));
     CHECK(contains(passes, "cull orphan vf"));
     CHECK(contains(passes, "cull orphan ee"));
@@ -145,9 +187,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     g = graph_of(scene);
     // Bounds passes cover the mover only; static bounds are uploaded once.
     CHECK(contains(names(g.passes()), "face bounds"));
-    const std::size_t refits = std::count_if(g.passes().begin(), g.passes().end(),
-                                             [](const auto& p) { return p.name.rfind("refit", 0) == 0; });
-    CHECK(refits == layout.trees[mover].depth());
+    CHECK(refitted_levels(g) == levels_up_from(layout.trees[mover].depth()));
     CHECK(g.passes().front().items == layout.moving_faces);
 
     scene.ignore(0, mover);

@@ -363,7 +363,7 @@ struct GraphBuilder {
 
   // Swept bounds of the moving prefix and the refit of its trees; static objects'
   // bounds are uploaded once.
-  void bounds_and_refit()
+  void bounds_and_refit(std::size_t group)
   {
     using namespace runtime;
     if (l.moving_faces == 0) return;
@@ -385,7 +385,12 @@ struct GraphBuilder {
     // A vertex is its own primitive: the kernel does not read the primitive buffer then.
     bounds_pass("vertex bounds", s.faces, 1, l.moving_vertices, s.vertex_boxes);
     // Deepest level first; each level reads the one below, written by the previous pass.
-    for (std::size_t level = l.levels.size() - 1; level-- > 0;) {
+    // The levels above the first with more nodes than a few per work-item of a group
+    // go in one launch, by one group.
+    const std::size_t levels = l.levels.size() - 1;
+    std::size_t top = 0;
+    while (top < levels && l.levels[top + 1] - l.levels[top] <= 4 * group) ++top;
+    for (std::size_t level = levels; level-- > top;) {
       const cl_uint first = l.levels[level], count = l.levels[level + 1] - first;
       g.pass("refit level " + std::to_string(level), {bounds, "cs_refit_level"})
           .launch_items(count)
@@ -397,6 +402,17 @@ struct GraphBuilder {
           .arg(value_of(count))
           .arg(buffer_of(s.node_boxes));
     }
+    if (top == 0) return;
+    s.levels = g.fixed("bvh levels", 4, l.levels.size());
+    g.pass("refit levels 0-" + std::to_string(top - 1), {bounds, "cs_refit_top_levels"})
+        .launch_items(group)
+        .update(s.node_boxes)
+        .read(s.face_boxes)
+        .arg(buffer_of(s.nodes))
+        .arg(buffer_of(s.face_boxes))
+        .arg(buffer_of(s.levels))
+        .arg(value_of(cl_uint(top - 1)))
+        .arg(buffer_of(s.node_boxes));
   }
 
   // The culls of the orphan pairs, then the front update (or search from fixed seeds)
@@ -523,15 +539,15 @@ struct GraphBuilder {
 }  // namespace
 
 CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
-                         std::size_t refine_items, bool bounded_loops)
+                         const GraphDevice& device)
 {
   if (options.solver.min_separation < 0) throw InputError("the minimum separation must not be negative");
   GraphBuilder b(layout, options);
   b.geometry_streams();
-  b.bounds_and_refit();
+  b.bounds_and_refit(device.work_group_size);
   if (!layout.seeds.empty()) {
-    b.broad_phase(front_size, bounded_loops);
-    b.elementary_tests(refine_items);
+    b.broad_phase(front_size, device.bounded_loops);
+    b.elementary_tests(device.refine_items);
     b.earliest_toi();
   }
   return std::move(b.out);

@@ -46,6 +46,7 @@ void upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout&
   q.write(s.faces, 0, t.faces.data(), t.faces.size());
   q.write(s.edges, 0, t.edges.data(), t.edges.size());
   q.write(s.nodes, 0, layout.nodes.data(), layout.nodes.size());
+  if (has(s.levels)) q.write(s.levels, 0, layout.levels.data(), layout.levels.size());
   for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
     const ObjectDescription& object = scene.objects[o];
     const std::vector<Vec3>& x = object.positions;

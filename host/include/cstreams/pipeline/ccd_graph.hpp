@@ -63,7 +63,7 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePa
 // The streams of the CCD graph; those a scene does not need stay unset.
 struct CcdStreams {
   runtime::StreamId x0, x1, x0_double, x1_double;
-  runtime::StreamId faces, edges, nodes, face_edges, owned, vertex_object;
+  runtime::StreamId faces, edges, nodes, levels, face_edges, owned, vertex_object;
   runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes;
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
@@ -106,13 +106,19 @@ struct CcdGraph {
   CcdStreams streams;
 };
 
+// What the graph takes from the device it runs on.
+struct GraphDevice {
+  std::size_t refine_items = 1 << 14;  // work-items of the conservative solver's refinement
+                                       // rounds: enough work-groups to fill the device
+  std::size_t work_group_size = 256;   // the scheduler's work-group size (its launches')
+  bool bounded_loops = false;          // the device ends loops early: the front update stops
+                                       // the run when a search ran out of loop trips (RunStopped)
+};
+
 // The CCD stream graph of one scene: swept bounds and refit for moving objects only,
 // the front update (or search from fixed seeds), the decomposition, the orphan culls
 // for self-colliding objects, the elementary tests, and the earliest time per object.
-// refine_items: the work-items of the conservative solver's refinement passes (enough
-// work-groups to fill the device). bounded_loops: for a device that ends loops early,
-// the front update stops the run when a search ran out of loop trips (RunStopped).
 CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
-                         std::size_t refine_items = 1 << 14, bool bounded_loops = false);
+                         const GraphDevice& device = {});
 
 }  // namespace cstreams
