@@ -46,12 +46,18 @@
 #define CS_FRONT_END (void)0
 #endif
 
-/* Both boxes are read whole before any slab is compared: loads that an early return
- * could skip are issued one after another, each waiting for the one before (on the
- * H200 the front update and the decomposition took a fifth longer so). A box starts
- * 72 bytes after the one before, so pairs of floats are aligned. */
+/* On a GPU both boxes are read whole before any slab is compared: loads that an early
+ * return could skip are issued one after another, each waiting for the one before (on
+ * the H200 the front update and the decomposition took a fifth longer so). A box starts
+ * 72 bytes after the one before, so pairs of floats are aligned. On a CPU the early
+ * return wins (pocl: the front update 180 -> 130 ms on cloth-ball). */
 inline int cs_dop_overlap(__global const float* a, __global const float* b)
 {
+#if CS_CPU
+  for (int k = 0; k < 9; ++k)
+    if (a[k] > b[9 + k] || b[k] > a[9 + k]) return 0;
+  return 1;
+#else
   float x[CS_DOP_FLOATS], y[CS_DOP_FLOATS];
   for (int k = 0; k < CS_DOP_FLOATS / 2; ++k) {
     const float2 u = ((__global const float2*)a)[k], v = ((__global const float2*)b)[k];
@@ -63,6 +69,7 @@ inline int cs_dop_overlap(__global const float* a, __global const float* b)
   int apart = 0;
   for (int k = 0; k < 9; ++k) apart |= (x[k] > y[9 + k]) | (y[k] > x[9 + k]);
   return !apart;
+#endif
 }
 
 inline int cs_faces_adjacent(__global const uint* faces, const uint f, const uint g)

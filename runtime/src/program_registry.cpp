@@ -71,6 +71,9 @@ std::string derive_device_options(const DeviceInfo& device, std::size_t work_gro
   if (device.fp64_extension == "cl_amd_fp64") options += " -DCS_FP64_AMD=1";
   // Kernels enable 64-bit atomics only under this (a device profile may take them away).
   options += device.int64_atomics ? " -DCS_HAS_INT64_ATOMICS=1" : " -DCS_HAS_INT64_ATOMICS=0";
+  // Where a test may stop early: a CPU runs a work-item's loads one after another
+  // anyway and gains from skipping them, a GPU from issuing them together.
+  options += device.kind == DeviceKind::cpu ? " -DCS_CPU=1" : " -DCS_CPU=0";
   options += device.is_pocl()     ? " -DCS_VENDOR_POCL=1"
              : device.is_nvidia() ? " -DCS_VENDOR_NVIDIA=1"
              : device.is_amd()    ? " -DCS_VENDOR_AMD=1"
