@@ -21,15 +21,32 @@ inline void cs_swept_dop(__global const float* x0, __global const float* x1, con
   }
 }
 
-/* One work-item per primitive of `corners` vertices (3 faces, 2 edges, 1 vertices). */
-__kernel void cs_primitive_bounds(__global const float* x0, __global const float* x1, __global const uint* primitives,
-                                  const uint corners, const uint n, const float separation, __global float* boxes)
+/* One work-item per moving primitive, in one launch: the nf faces, then the ne edges,
+ * then the nv vertices (three launches of a few hundred thousand items each took
+ * longer than one of their sum). */
+__kernel void cs_primitive_bounds(__global const float* x0, __global const float* x1, __global const uint* faces,
+                                  __global const uint* edges, const uint nf, const uint ne, const uint nv,
+                                  const float separation, __global float* face_boxes, __global float* edge_boxes,
+                                  __global float* vertex_boxes)
 {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
+  uint i = get_global_id(0);
   uint vertices[3];
-  for (uint c = 0; c < corners; ++c) vertices[c] = corners == 1 ? i : primitives[corners * i + c];
-  cs_swept_dop(x0, x1, vertices, (int)corners, separation, boxes + (size_t)CS_DOP_FLOATS * i);
+  if (i < nf) {
+    for (int c = 0; c < 3; ++c) vertices[c] = faces[3 * i + c];
+    cs_swept_dop(x0, x1, vertices, 3, separation, face_boxes + (size_t)CS_DOP_FLOATS * i);
+    return;
+  }
+  i -= nf;
+  if (i < ne) {
+    for (int c = 0; c < 2; ++c) vertices[c] = edges[2 * i + c];
+    cs_swept_dop(x0, x1, vertices, 2, separation, edge_boxes + (size_t)CS_DOP_FLOATS * i);
+    return;
+  }
+  i -= ne;
+  if (i < nv) {
+    vertices[0] = i;
+    cs_swept_dop(x0, x1, vertices, 1, separation, vertex_boxes + (size_t)CS_DOP_FLOATS * i);
+  }
 }
 
 /* nodes: (first child or -1, face or -1, parent, depth) per node. */

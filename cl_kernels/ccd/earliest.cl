@@ -16,16 +16,12 @@ __kernel void cs_clear_earliest(const uint objects, __global uint* earliest)
   if (i < objects) earliest[i] = as_uint(1.0f);
 }
 
-/* contacts: (feature a, feature b, time bits) as narrow_phase_pairs.cl emits them,
- * built with the same CS_REAL_DOUBLE; vertex_face: a is a vertex and b a face, else
- * both are edges. */
-__kernel void cs_earliest_toi(__global const uint4* contacts, const uint n, const uint vertex_face,
-                              __global const uint* faces, __global const uint* edges,
-                              __global const uint* vertex_object, __global uint* earliest)
+/* One contact of `contacts`: (feature a, feature b, time bits) as narrow_phase_pairs.cl
+ * emits them, built with the same CS_REAL_DOUBLE; vertex_face: a is a vertex and b a
+ * face, else both are edges. */
+inline void cs_earliest_of(const uint4 c, const uint vertex_face, __global const uint* faces,
+                           __global const uint* edges, __global const uint* vertex_object, __global uint* earliest)
 {
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  const uint4 c = contacts[i];
 #if CS_REAL_DOUBLE
   const double d = as_double(c.zw);
   float t = (float)d;
@@ -39,4 +35,31 @@ __kernel void cs_earliest_toi(__global const uint4* contacts, const uint n, cons
    * only falls, so a time no earlier than what is already there needs none. */
   if (as_uint(t) < earliest[a]) atomic_min(&earliest[a], as_uint(t));
   if (as_uint(t) < earliest[b]) atomic_min(&earliest[b], as_uint(t));
+}
+
+/* Every contact stream of a step in one launch (up to four; unused ones hold 0). */
+__kernel void cs_earliest_toi(__global const uint4* contacts0, const uint n0, const uint vertex_face0,
+                              __global const uint4* contacts1, const uint n1, const uint vertex_face1,
+                              __global const uint4* contacts2, const uint n2, const uint vertex_face2,
+                              __global const uint4* contacts3, const uint n3, const uint vertex_face3,
+                              __global const uint* faces, __global const uint* edges,
+                              __global const uint* vertex_object, __global uint* earliest)
+{
+  uint i = get_global_id(0);
+  if (i < n0) {
+    cs_earliest_of(contacts0[i], vertex_face0, faces, edges, vertex_object, earliest);
+    return;
+  }
+  i -= n0;
+  if (i < n1) {
+    cs_earliest_of(contacts1[i], vertex_face1, faces, edges, vertex_object, earliest);
+    return;
+  }
+  i -= n1;
+  if (i < n2) {
+    cs_earliest_of(contacts2[i], vertex_face2, faces, edges, vertex_object, earliest);
+    return;
+  }
+  i -= n2;
+  if (i < n3) cs_earliest_of(contacts3[i], vertex_face3, faces, edges, vertex_object, earliest);
 }

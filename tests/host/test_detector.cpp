@@ -142,7 +142,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     scene.add(ball("cloth", {0, 0, 0}, ObjectKind::deformable, true));
     const auto g = graph_of(scene);
     const auto passes = names(g.passes()), streams = names(g.streams());
-    CHECK(contains(passes, "face bounds"));
+    CHECK(contains(passes, "swept bounds"));
     CHECK(contains(passes, "refit levels 0-" + std::to_string(make_layout(scene, 0).depth - 1)));
     CHECK(contains(passes, "front update"));
     CHECK(contains(passes, "cull orphan vf"));
@@ -162,7 +162,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     auto g = graph_of(scene);
     CHECK(!contains(names(g.passes()), "front update"));
     CHECK(!contains(names(g.streams()), "orphan vf"));
-    CHECK(contains(names(g.passes()), "face bounds"));  // still refit: it moves
+    CHECK(contains(names(g.passes()), "swept bounds"));  // still refit: it moves
 
     scene.add(ball("b", {2, 0, 0}, ObjectKind::rigid, true));  // rigid: never self
     g = graph_of(scene);
@@ -186,9 +186,9 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     CHECK(layout.slots.front().object == mover);  // moving objects first
     g = graph_of(scene);
     // Bounds passes cover the mover only; static bounds are uploaded once.
-    CHECK(contains(names(g.passes()), "face bounds"));
+    CHECK(contains(names(g.passes()), "swept bounds"));
     CHECK(refitted_levels(g) == levels_up_from(layout.trees[mover].depth()));
-    CHECK(g.passes().front().items == layout.moving_faces);
+    CHECK(g.passes().front().items == layout.moving_faces + layout.moving_edges + layout.moving_vertices);
 
     scene.ignore(0, mover);
     scene.ignore(1, mover);

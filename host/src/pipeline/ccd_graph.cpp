@@ -213,6 +213,30 @@ runtime::PassSpec& geometry_args(runtime::PassSpec& pass, const TestInputs& in, 
       .arg(value_of(cl_uint(precision == Precision::double_)));
 }
 
+// Kernels over every candidate (or contact) stream of a step in one launch take four
+// (pairs, count, vertex_face) triples, the unused ones counting 0 (cs_screen_pairs,
+// cs_earliest_toi): the pass launches over them all and takes them as its first
+// arguments.
+void over_streams(runtime::PassSpec& pass, const std::vector<std::pair<runtime::StreamId, ContactKind>>& streams,
+                  const char* what)
+{
+  using namespace runtime;
+  constexpr std::size_t inputs = 4;
+  if (streams.empty() || streams.size() > inputs)
+    throw Error(std::string(what) + " takes 1 to " + std::to_string(inputs) + " streams, not " +
+                std::to_string(streams.size()));
+  std::vector<StreamId> over;
+  for (const auto& s : streams) over.push_back(s.first);
+  pass.launch_over(over);
+  for (std::size_t k = 0; k < inputs; ++k) {
+    const bool used = k < streams.size();
+    const auto& [stream, kind] = streams[used ? k : 0];
+    pass.arg(buffer_of(stream))
+        .arg(used ? count_of(stream) : value_of(cl_uint(0)))
+        .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
+  }
+}
+
 }  // namespace
 
 runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& in, runtime::StreamId pairs,
@@ -255,29 +279,16 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   }
   // The conservative solver screens every candidate stream in one pass and refines
   // what is left as one work list, so that its rounds are paid once a step.
-  constexpr std::size_t screen_inputs = 4;  // cs_screen_pairs
-  if (in.candidates.empty() || in.candidates.size() > screen_inputs)
-    throw Error("the conservative screen takes 1 to " + std::to_string(screen_inputs) + " candidate streams, not " +
-                std::to_string(in.candidates.size()));
   const StreamId open = g.variable("open queries", 16, sized(1024));
-  std::vector<StreamId> inputs;
-  for (const auto& c : in.candidates) inputs.push_back(c.first);
   const bool float_first = solver.precision == Precision::double_ && in.x0_float != StreamId{};
   SolverOptions in_float = solver;
   in_float.precision = Precision::single;
   const StreamId screened = float_first ? g.variable("open queries in float", 16, sized(1024)) : open;
   auto& test = g.pass(float_first ? "test candidates in float" : "test candidates",
                       {screen, "cs_screen_pairs", float_first ? solver_build_options(in_float) : options})
-                   .launch_over(inputs)
                    .emit(screened)
                    .expect_items(0.5);
-  for (std::size_t k = 0; k < screen_inputs; ++k) {
-    const bool used = k < in.candidates.size();
-    const auto& [input, kind] = in.candidates[used ? k : 0];
-    test.arg(buffer_of(input))
-        .arg(used ? count_of(input) : value_of(cl_uint(0)))
-        .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
-  }
+  over_streams(test, in.candidates, "the conservative screen");
   // The screen in the solver's precision: the only one, or the second after the float one.
   PassSpec* screen_in_precision = &test;
   if (float_first) {
@@ -368,22 +379,22 @@ struct GraphBuilder {
     using namespace runtime;
     if (l.moving_faces == 0) return;
     const char* bounds = "ccd/bounds.cl";
-    auto bounds_pass = [&](const char* name, StreamId primitives, cl_uint corners, std::size_t n, StreamId boxes) {
-      g.pass(name, {bounds, "cs_primitive_bounds"})
-          .launch_items(n)
-          .write(boxes)
-          .arg(buffer_of(s.x0))
-          .arg(buffer_of(s.x1))
-          .arg(buffer_of(primitives))
-          .arg(value_of(corners))
-          .arg(value_of(cl_uint(n)))
-          .arg(value_of(separation))
-          .arg(buffer_of(boxes));
-    };
-    bounds_pass("face bounds", s.faces, 3, l.moving_faces, s.face_boxes);
-    bounds_pass("edge bounds", s.edges, 2, l.moving_edges, s.edge_boxes);
-    // A vertex is its own primitive: the kernel does not read the primitive buffer then.
-    bounds_pass("vertex bounds", s.faces, 1, l.moving_vertices, s.vertex_boxes);
+    g.pass("swept bounds", {bounds, "cs_primitive_bounds"})
+        .launch_items(l.moving_faces + l.moving_edges + l.moving_vertices)
+        .write(s.face_boxes)
+        .write(s.edge_boxes)
+        .write(s.vertex_boxes)
+        .arg(buffer_of(s.x0))
+        .arg(buffer_of(s.x1))
+        .arg(buffer_of(s.faces))
+        .arg(buffer_of(s.edges))
+        .arg(value_of(cl_uint(l.moving_faces)))
+        .arg(value_of(cl_uint(l.moving_edges)))
+        .arg(value_of(cl_uint(l.moving_vertices)))
+        .arg(value_of(separation))
+        .arg(buffer_of(s.face_boxes))
+        .arg(buffer_of(s.edge_boxes))
+        .arg(buffer_of(s.vertex_boxes));
     // Deepest level first; each level reads the one below, written by the previous pass.
     // The levels above the first with more nodes than a few per work-item of a group
     // go in one launch, by one group.
@@ -521,18 +532,9 @@ struct GraphBuilder {
         .write(s.earliest)
         .arg(value_of(cl_uint(l.slots.size())))
         .arg(buffer_of(s.earliest));
-    for (const auto& [found, kind] : s.contacts)
-      g.pass("earliest toi of " + g.stream(found).name,
-             {earliest, "cs_earliest_toi", time_options})
-          .launch_over(found)
-          .update(s.earliest)
-          .arg(buffer_of(found))
-          .arg(count_of(found))
-          .arg(value_of(cl_uint(kind == ContactKind::vertex_face)))
-          .arg(buffer_of(s.faces))
-          .arg(buffer_of(s.edges))
-          .arg(buffer_of(s.vertex_object))
-          .arg(buffer_of(s.earliest));
+    auto& pass = g.pass("earliest toi", {earliest, "cs_earliest_toi", time_options}).update(s.earliest);
+    over_streams(pass, s.contacts, "the earliest time of impact");
+    pass.arg(buffer_of(s.faces)).arg(buffer_of(s.edges)).arg(buffer_of(s.vertex_object)).arg(buffer_of(s.earliest));
   }
 };
 

@@ -67,15 +67,25 @@ void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& stre
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
   const std::uint64_t launches = context_.kernel_launches();
-  std::size_t first = 0;
-  for (const auto& [stream, kind] : streams.contacts) {
-    const std::size_t count = scheduler.count(stream);
-    make_records_.set_args(scheduler.buffer(stream), cl_uint(count), cl_uint(kind == ContactKind::vertex_face),
-                           cl_uint(double_time_), scheduler.buffer(streams.faces), scheduler.buffer(streams.edges),
-                           scheduler.buffer(streams.vertex_object), first_vertex_, records_, cl_uint(first));
-    context_.launch(make_records_, count, context_.work_group_size(), events, stats.name);
-    first += count;
+  constexpr std::size_t inputs = 4;  // cs_contact_records
+  if (streams.contacts.size() > inputs)
+    throw runtime::Error("contact records: " + std::to_string(streams.contacts.size()) +
+                         " contact streams, more than " + std::to_string(inputs));
+  unsigned a = 0;
+  for (std::size_t k = 0; k < inputs; ++k) {
+    const bool used = k < streams.contacts.size();
+    const auto& [stream, kind] = streams.contacts[used ? k : 0];
+    make_records_.set_arg(a++, scheduler.buffer(stream));
+    make_records_.set_arg(a++, cl_uint(used ? scheduler.count(stream) : 0));
+    make_records_.set_arg(a++, cl_uint(kind == ContactKind::vertex_face));
   }
+  make_records_.set_arg(a++, cl_uint(double_time_));
+  make_records_.set_arg(a++, scheduler.buffer(streams.faces));
+  make_records_.set_arg(a++, scheduler.buffer(streams.edges));
+  make_records_.set_arg(a++, scheduler.buffer(streams.vertex_object));
+  make_records_.set_arg(a++, first_vertex_);
+  make_records_.set_arg(a++, records_);
+  context_.launch(make_records_, n, context_.work_group_size(), events, stats.name);
   const runtime::Buffer& sorted = sorter_.sort(records_, n, events, stats.name.c_str());
   stats.launches = unsigned(context_.kernel_launches() - launches);
   const std::size_t bytes = n * record_words * sizeof(cl_uint);
