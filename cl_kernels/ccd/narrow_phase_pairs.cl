@@ -12,25 +12,57 @@ inline int cs_filtered(const cs_query* q, const uint vertex_face, const uint use
   return use_filter && separation == 0 && cs_non_penetration_filter(q, (int)vertex_face);
 }
 
-/* The cubic solver, to the end: colliding pairs are emitted as contacts. */
-__kernel void cs_cubic_pairs(__global const uint2* pairs, const uint n, const uint vertex_face,
-                             __global const real* x0, __global const real* x1, __global const uint* faces,
-                             __global const uint* edges, const uint exact_input, const real tolerance,
-                             const real separation, const uint use_filter, CS_EMITTER_PARAMS(uint4, contacts))
+/* Kernels over every candidate stream of a step at once take up to four of them, the
+ * unused ones with n = 0, and go over their concatenation, one work-item a pair. */
+#define CS_STREAM_PARAMS(k) __global const uint2 *pairs##k, const uint n##k, const uint vertex_face##k
+#define CS_FOUR_STREAMS CS_STREAM_PARAMS(0), CS_STREAM_PARAMS(1), CS_STREAM_PARAMS(2), CS_STREAM_PARAMS(3)
+#define CS_FOUR_STREAM_ARGS \
+  pairs0, n0, vertex_face0, pairs1, n1, vertex_face1, pairs2, n2, vertex_face2, pairs3, n3, vertex_face3
+
+/* Pair i of the concatenation and its kind; 0 past its end. */
+inline int cs_candidate(const uint i, CS_FOUR_STREAMS, uint2* pair, uint* vertex_face)
 {
-  CS_EMITTER_BEGIN(contacts);
-  const uint i = get_global_id(0);
-  if (i < n) {
+  if (i < n0) {
+    *pair = pairs0[i];
+    *vertex_face = vertex_face0;
+  } else if (i < n0 + n1) {
+    *pair = pairs1[i - n0];
+    *vertex_face = vertex_face1;
+  } else if (i < n0 + n1 + n2) {
+    *pair = pairs2[i - n0 - n1];
+    *vertex_face = vertex_face2;
+  } else if (i < n0 + n1 + n2 + n3) {
+    *pair = pairs3[i - n0 - n1 - n2];
+    *vertex_face = vertex_face3;
+  } else {
+    return 0;
+  }
+  return 1;
+}
+
+/* The cubic solver, to the end: colliding pairs are emitted as contacts of their kind. */
+__kernel void cs_cubic_pairs(CS_FOUR_STREAMS, __global const real* x0, __global const real* x1,
+                             __global const uint* faces, __global const uint* edges, const uint exact_input,
+                             const real tolerance, const real separation, const uint use_filter,
+                             CS_EMITTER_PARAMS(uint4, vf_contacts), CS_EMITTER_PARAMS(uint4, ee_contacts))
+{
+  CS_EMITTER_BEGIN(vf_contacts);
+  CS_EMITTER_BEGIN(ee_contacts);
+  uint2 pair;
+  uint vertex_face;
+  if (cs_candidate(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face)) {
     real q[24];
-    cs_pair_points(pairs[i], vertex_face, x0, x1, faces, edges, q);
+    cs_pair_points(pair, vertex_face, x0, x1, faces, edges, q);
     const cs_query query = cs_points_query(q, exact_input);
     if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
       real at[3];
       const uint s = cs_cubic(q, (int)vertex_face, tolerance, at);
-      if (s == CS_COLLIDES) CS_EMIT(contacts, cs_contact(pairs[i], at[0], s));
+      if (s == CS_COLLIDES && vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, at[0], s));
+      if (s == CS_COLLIDES && !vertex_face) CS_EMIT(ee_contacts, cs_contact(pair, at[0], s));
     }
   }
-  CS_EMITTER_END(contacts);
+  CS_EMITTER_END(vf_contacts);
+  CS_EMITTER_END(ee_contacts);
 }
 
 /* Whether the bounds over the whole parameter box and the filter leave a pair open.
@@ -53,40 +85,20 @@ inline int cs_screen_open(const uint2 pair, const uint vertex_face, __global con
   return !cs_filtered(&query, vertex_face, use_filter, separation);
 }
 
-/* The conservative solver's screen over every candidate stream at once (up to four,
- * the unused ones with n = 0), one work-item a pair of their concatenation: the
- * filter and the bounds over the whole parameter box settle most pairs at once; the
- * rest are emitted as (a, b, vertex_face, 0) for refinement (refine.cl), one list for
- * all kinds so that its rounds are paid once. */
-__kernel void cs_screen_pairs(__global const uint2* pairs0, const uint n0, const uint vertex_face0,
-                              __global const uint2* pairs1, const uint n1, const uint vertex_face1,
-                              __global const uint2* pairs2, const uint n2, const uint vertex_face2,
-                              __global const uint2* pairs3, const uint n3, const uint vertex_face3,
-                              __global const real* x0, __global const real* x1, __global const uint* faces,
-                              __global const uint* edges, const uint exact_input, const real separation,
-                              const uint use_filter, CS_EMITTER_PARAMS(uint4, unresolved))
+/* The conservative solver's screen over every candidate stream: the filter and the
+ * bounds over the whole parameter box settle most pairs at once; the rest are emitted
+ * as (a, b, vertex_face, 0) for refinement (refine.cl), one list for all kinds so that
+ * its rounds are paid once. */
+__kernel void cs_screen_pairs(CS_FOUR_STREAMS, __global const real* x0, __global const real* x1,
+                              __global const uint* faces, __global const uint* edges, const uint exact_input,
+                              const real separation, const uint use_filter, CS_EMITTER_PARAMS(uint4, unresolved))
 {
   CS_EMITTER_BEGIN(unresolved);
-  const uint i = get_global_id(0);
-  if (i < n0 + n1 + n2 + n3) {
-    uint2 pair;
-    uint vertex_face;
-    if (i < n0) {
-      pair = pairs0[i];
-      vertex_face = vertex_face0;
-    } else if (i < n0 + n1) {
-      pair = pairs1[i - n0];
-      vertex_face = vertex_face1;
-    } else if (i < n0 + n1 + n2) {
-      pair = pairs2[i - n0 - n1];
-      vertex_face = vertex_face2;
-    } else {
-      pair = pairs3[i - n0 - n1 - n2];
-      vertex_face = vertex_face3;
-    }
-    if (cs_screen_open(pair, vertex_face, x0, x1, faces, edges, exact_input, separation, use_filter))
-      CS_EMIT(unresolved, (uint4)(pair, vertex_face, 0u));
-  }
+  uint2 pair;
+  uint vertex_face;
+  if (cs_candidate(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face) &&
+      cs_screen_open(pair, vertex_face, x0, x1, faces, edges, exact_input, separation, use_filter))
+    CS_EMIT(unresolved, (uint4)(pair, vertex_face, 0u));
   CS_EMITTER_END(unresolved);
 }
 

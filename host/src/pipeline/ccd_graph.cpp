@@ -261,24 +261,23 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   const std::string options = solver_build_options(solver) + (mark_limits ? " -DCS_MARK_LIMIT=1" : "");
   const char* screen = "ccd/narrow_phase_pairs.cl";
   const char* refine = "ccd/refine.cl";
-  std::vector<std::pair<StreamId, ContactKind>> contacts;
-  auto common = [&](PassSpec& pass, StreamId pairs, ContactKind kind) -> PassSpec& {
-    return pair_kernel_args(pass, in, pairs, kind, solver.precision);
-  };
   auto real = [&](PassSpec& pass, double x) -> PassSpec& { return real_arg(pass, x, solver.precision); };
+  // Every candidate stream goes through one pass: small streams (the orphans') in
+  // launches of their own would each cost a launch, whatever their work.
+  const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
+  g.gather(vf);
+  g.gather(ee);
+  const std::vector<std::pair<StreamId, ContactKind>> contacts = {{vf, ContactKind::vertex_face},
+                                                                  {ee, ContactKind::edge_edge}};
   if (solver.solver == Solver::cubic) {
-    for (const auto& [input, kind] : in.candidates) {
-      const std::string name = g.stream(input).name;
-      const StreamId found = g.variable("contacts from " + name, 16, sized(256));
-      g.gather(found);
-      contacts.emplace_back(found, kind);
-      auto& test = g.pass("test " + name, {screen, "cs_cubic_pairs", options}).launch_over(input).emit(found).expect_items(0.25);
-      real(real(common(test, input, kind), solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.filter)));
-    }
+    auto& test = g.pass("test candidates", {screen, "cs_cubic_pairs", options}).emit(vf).emit(ee).expect_items(0.25);
+    over_streams(test, in.candidates, "the cubic solver");
+    real(real(geometry_args(test, in, solver.precision), solver.tolerance), solver.min_separation)
+        .arg(value_of(cl_uint(solver.filter)));
     return contacts;
   }
-  // The conservative solver screens every candidate stream in one pass and refines
-  // what is left as one work list, so that its rounds are paid once a step.
+  // The conservative solver refines what its screen leaves open as one work list, so
+  // that its rounds are paid once a step.
   const StreamId open = g.variable("open queries", 16, sized(1024));
   const bool float_first = solver.precision == Precision::double_ && in.x0_float != StreamId{};
   SolverOptions in_float = solver;
@@ -307,10 +306,6 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   real(geometry_args(*screen_in_precision, in, solver.precision), solver.min_separation)
       .arg(value_of(cl_uint(solver.filter)));
 
-  const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
-  g.gather(vf);
-  g.gather(ee);
-  contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
   // One box a work-item, breadth first across the device (refine.cl): an item is a
   // query index, its work and a box of six reals; the state of a query two keys of at
   // most one real each (a float on devices without 64-bit atomics) and four words.
