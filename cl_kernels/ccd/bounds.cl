@@ -21,9 +21,8 @@ inline void cs_swept_dop(__global const float* x0, __global const float* x1, con
   }
 }
 
-/* One work-item per moving primitive, in one launch: the nf faces, then the ne edges,
- * then the nv vertices (three launches of a few hundred thousand items each took
- * longer than one of their sum). */
+/* One work-item per moving primitive: the nf faces, then the ne edges, then the nv
+ * vertices, in one launch rather than one a kind. */
 __kernel void cs_primitive_bounds(__global const float* x0, __global const float* x1, __global const uint* faces,
                                   __global const uint* edges, const uint nf, const uint ne, const uint nv,
                                   const float separation, __global float* face_boxes, __global float* edge_boxes,

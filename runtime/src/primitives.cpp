@@ -98,33 +98,34 @@ std::size_t checked_record_words(std::size_t words)
                 std::to_string(Sorter::max_words));
   return words;
 }
+
+// Half the local memory at most, so that two groups can share a compute unit, and no
+// more than 16 KiB: longer blocks save a merge pass each but lengthen the network.
+std::size_t block_records(const Context& context, std::size_t words)
+{
+  const std::size_t bytes = std::min<std::size_t>(context.device().local_memory / 2, 16384);
+  std::size_t block = 1;
+  while (2 * block * words * sizeof(cl_uint) <= bytes) block *= 2;
+  if (block < 2)
+    throw Error("sort: device " + context.device().name + " has too little local memory for two records of " +
+                std::to_string(words) + " words");
+  return block;
+}
 }  // namespace
 
 Sorter::Sorter(Context& context, std::size_t words)
     : context_(context),
       words_(checked_record_words(words)),
+      block_(block_records(context, words)),
       blocks_(context.programs().kernel("runtime/sort.cl", "cs_sort_blocks", "-DCS_SORT_WORDS=" + std::to_string(words))),
       merge_(context.programs().kernel("runtime/sort.cl", "cs_merge_runs", "-DCS_SORT_WORDS=" + std::to_string(words)))
 {
 }
 
-std::size_t Sorter::block_records() const
-{
-  // Half the local memory at most, so that two groups can share a compute unit, and no
-  // more than 16 KiB: longer blocks save a merge pass each but lengthen the network.
-  const std::size_t bytes = std::min<std::size_t>(context_.device().local_memory / 2, 16384);
-  std::size_t block = 1;
-  while (2 * block * words_ * sizeof(cl_uint) <= bytes) block *= 2;
-  if (block < 2)
-    throw Error("sort: device " + context_.device().name + " has too little local memory for two records of " +
-                std::to_string(words_) + " words");
-  return block;
-}
-
 void Sorter::reserve(std::size_t n)
 {
   // Runs that fit one block sort in local memory and merge nothing.
-  if (n >= 2 && block_records() < n) ensure_capacity(context_, scratch_, n * words_ * sizeof(cl_uint), "sort scratch");
+  if (n >= 2 && block_ < n) ensure_capacity(context_, scratch_, n * words_ * sizeof(cl_uint), "sort scratch");
 }
 
 const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timeline, const char* label)
@@ -133,18 +134,17 @@ const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timel
     throw Error(std::string(label) + ": " + std::to_string(n) + " records, the sort takes fewer than 2^31");
   if (n < 2) return records;
   const std::size_t wg = context_.work_group_size();
-  const std::size_t block = block_records();
-  const std::size_t groups = (n + block - 1) / block;
-  blocks_.set_args(records, cl_uint(n), cl_uint(block));
-  blocks_.set_local(3, block * words_ * sizeof(cl_uint));
+  const std::size_t groups = (n + block_ - 1) / block_;
+  blocks_.set_args(records, cl_uint(n), cl_uint(block_));
+  blocks_.set_local(3, block_ * words_ * sizeof(cl_uint));
   context_.launch(blocks_, groups * wg, wg, timeline, label);
-  if (block >= n) return records;
+  if (block_ >= n) return records;
   reserve(n);
   const Buffer* in = &records;
   const Buffer* out = &scratch_;
-  for (std::size_t width = block; width < n; width *= 2) {
-    merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(block));
-    merge_.set_local(5, block * words_ * sizeof(cl_uint));
+  for (std::size_t width = block_; width < n; width *= 2) {
+    merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(block_));
+    merge_.set_local(5, block_ * words_ * sizeof(cl_uint));
     context_.launch(merge_, groups * wg, wg, timeline, label);
     std::swap(in, out);
   }

@@ -62,8 +62,8 @@ private:
 // Sorts records of `words` 32-bit words, compared word by word as unsigned integers
 // (the first word most significant), on the device: blocks of a few hundred records in
 // local memory, then merge passes that each double the sorted runs, each linear in n.
-// The kernels are built for one record length, which a record's words are held in
-// private memory; scratch for the passes is kept and only ever grows.
+// The kernels are built for one record length, so that a work-item holds a record's
+// words in private memory; scratch for the passes is kept and only ever grows.
 class Sorter {
 public:
   // Records of up to max_words words: longer ones would not fit a work-item's registers.
@@ -80,12 +80,10 @@ public:
   std::size_t scratch_bytes() const { return scratch_.bytes(); }
 
 private:
-  // Records a work-group sorts in local memory: a power of two, or 0 where fewer than
-  // two records fit.
-  std::size_t block_records() const;
-
   Context& context_;
   std::size_t words_;
+  // Records a work-group sorts (and merges a tile of) in local memory: a power of two.
+  std::size_t block_;
   Kernel blocks_;
   Kernel merge_;
   Buffer scratch_;
