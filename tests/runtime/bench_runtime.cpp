@@ -1,5 +1,5 @@
 // Benchmark of the runtime's primitives against Boost.Compute and a single global
-// atomic counter. Prints a Markdown table (the one in BENCHMARKS.md):
+// atomic counter, and of the sort. Prints a Markdown table (the one in BENCHMARKS.md):
 //   build/bin/bench_runtime [--sizes 1000000,4000000] [--repeat 15]
 // Times are wall-clock medians after one warm-up, each repeat ending in clFinish (or
 // the scheduler's own blocking counter read), so launches and host round trips count.
@@ -15,9 +15,9 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <random>
 

@@ -77,6 +77,7 @@ void check_compaction(std::size_t n, std::size_t capacity_factor_percent)
   CHECK(count == kept);  // the count is exact even when the destination is too small
   CHECK(std::equal(result.begin(), result.end(), expected.begin()));
 }
+
 enum class Order { random, ascending, descending };
 
 // Records whose leading words repeat often, so that comparisons reach the later

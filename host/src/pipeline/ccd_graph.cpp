@@ -214,9 +214,9 @@ runtime::PassSpec& geometry_args(runtime::PassSpec& pass, const TestInputs& in, 
 }
 
 // Kernels over every candidate (or contact) stream of a step in one launch take four
-// (pairs, count, vertex_face) triples, the unused ones counting 0 (cs_screen_pairs,
-// cs_earliest_toi): the pass launches over them all and takes them as its first
-// arguments.
+// (pairs, count, vertex_face) triples, the unused ones counting 0 (cs_cubic_pairs,
+// cs_screen_pairs, cs_earliest_toi): the pass launches over them all and takes them as
+// its first arguments.
 void over_streams(runtime::PassSpec& pass, const std::vector<std::pair<runtime::StreamId, ContactKind>>& streams,
                   const char* what)
 {
