@@ -6,6 +6,7 @@
  * vertices of the 2^32 that vertex ids can name. Times are never negative, so their
  * bits order as the times do; a single-precision time is its float's bits and a zero
  * low word. */
+#include "streams.h"
 
 /* One found pair c: (feature a, feature b, time bits) as narrow_phase_pairs.cl emits
  * them; vertex_face: a is a vertex and b a face, else both are edges. */
@@ -45,33 +46,17 @@ inline uint8 cs_contact_record(const uint4 c, const uint vertex_face, const uint
   return (uint8)((vertex_face ? 0u : 1u) << 31 | object_a, object_b, v, time);
 }
 
-/* The records of every contact stream of a step (up to four; unused ones hold 0), in
- * one launch: the pairs of stream k go after those of the streams before it. */
-__kernel void cs_contact_records(__global const uint4* contacts0, const uint n0, const uint vertex_face0,
-                                 __global const uint4* contacts1, const uint n1, const uint vertex_face1,
-                                 __global const uint4* contacts2, const uint n2, const uint vertex_face2,
-                                 __global const uint4* contacts3, const uint n3, const uint vertex_face3,
-                                 const uint double_time, __global const uint* faces, __global const uint2* edges,
-                                 __global const uint* vertex_object, __global const uint* first_vertex,
-                                 __global uint8* records)
+CS_DEFINE_STREAM_ITEM(uint4)
+
+/* The records of every contact stream of a step in one launch: the pairs of stream k
+ * go after those of the streams before it. */
+__kernel void cs_contact_records(CS_FOUR_STREAMS(uint4), const uint double_time, __global const uint* faces,
+                                 __global const uint2* edges, __global const uint* vertex_object,
+                                 __global const uint* first_vertex, __global uint8* records)
 {
   const uint i = get_global_id(0);
   uint4 c;
   uint vertex_face;
-  if (i < n0) {
-    c = contacts0[i];
-    vertex_face = vertex_face0;
-  } else if (i < n0 + n1) {
-    c = contacts1[i - n0];
-    vertex_face = vertex_face1;
-  } else if (i < n0 + n1 + n2) {
-    c = contacts2[i - n0 - n1];
-    vertex_face = vertex_face2;
-  } else if (i < n0 + n1 + n2 + n3) {
-    c = contacts3[i - n0 - n1 - n2];
-    vertex_face = vertex_face3;
-  } else {
-    return;
-  }
-  records[i] = cs_contact_record(c, vertex_face, double_time, faces, edges, vertex_object, first_vertex);
+  if (cs_stream_item_uint4(i, CS_FOUR_STREAM_ARGS, &c, &vertex_face))
+    records[i] = cs_contact_record(c, vertex_face, double_time, faces, edges, vertex_object, first_vertex);
 }

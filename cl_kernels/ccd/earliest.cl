@@ -9,6 +9,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
 #endif
+#include "streams.h"
 
 __kernel void cs_clear_earliest(const uint objects, __global uint* earliest)
 {
@@ -37,29 +38,14 @@ inline void cs_earliest_of(const uint4 c, const uint vertex_face, __global const
   if (as_uint(t) < earliest[b]) atomic_min(&earliest[b], as_uint(t));
 }
 
-/* Every contact stream of a step in one launch (up to four; unused ones hold 0). */
-__kernel void cs_earliest_toi(__global const uint4* contacts0, const uint n0, const uint vertex_face0,
-                              __global const uint4* contacts1, const uint n1, const uint vertex_face1,
-                              __global const uint4* contacts2, const uint n2, const uint vertex_face2,
-                              __global const uint4* contacts3, const uint n3, const uint vertex_face3,
-                              __global const uint* faces, __global const uint* edges,
+CS_DEFINE_STREAM_ITEM(uint4)
+
+/* Every contact stream of a step in one launch. */
+__kernel void cs_earliest_toi(CS_FOUR_STREAMS(uint4), __global const uint* faces, __global const uint* edges,
                               __global const uint* vertex_object, __global uint* earliest)
 {
-  uint i = get_global_id(0);
-  if (i < n0) {
-    cs_earliest_of(contacts0[i], vertex_face0, faces, edges, vertex_object, earliest);
-    return;
-  }
-  i -= n0;
-  if (i < n1) {
-    cs_earliest_of(contacts1[i], vertex_face1, faces, edges, vertex_object, earliest);
-    return;
-  }
-  i -= n1;
-  if (i < n2) {
-    cs_earliest_of(contacts2[i], vertex_face2, faces, edges, vertex_object, earliest);
-    return;
-  }
-  i -= n2;
-  if (i < n3) cs_earliest_of(contacts3[i], vertex_face3, faces, edges, vertex_object, earliest);
+  uint4 c;
+  uint vertex_face;
+  if (cs_stream_item_uint4(get_global_id(0), CS_FOUR_STREAM_ARGS, &c, &vertex_face))
+    cs_earliest_of(c, vertex_face, faces, edges, vertex_object, earliest);
 }

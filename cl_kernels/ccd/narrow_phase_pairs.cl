@@ -5,6 +5,7 @@
 #include "cubic.h"
 #include "filter.h"
 #include "pairs.h"
+#include "streams.h"
 #include "runtime/registration.h"
 
 inline int cs_filtered(const cs_query* q, const uint vertex_face, const uint use_filter, const real separation)
@@ -12,36 +13,10 @@ inline int cs_filtered(const cs_query* q, const uint vertex_face, const uint use
   return use_filter && separation == 0 && cs_non_penetration_filter(q, (int)vertex_face);
 }
 
-/* Kernels over every candidate stream of a step at once take up to four of them, the
- * unused ones with n = 0, and go over their concatenation, one work-item a pair. */
-#define CS_STREAM_PARAMS(k) __global const uint2 *pairs##k, const uint n##k, const uint vertex_face##k
-#define CS_FOUR_STREAMS CS_STREAM_PARAMS(0), CS_STREAM_PARAMS(1), CS_STREAM_PARAMS(2), CS_STREAM_PARAMS(3)
-#define CS_FOUR_STREAM_ARGS \
-  pairs0, n0, vertex_face0, pairs1, n1, vertex_face1, pairs2, n2, vertex_face2, pairs3, n3, vertex_face3
-
-/* Pair i of the concatenation and its kind; 0 past its end. */
-inline int cs_candidate(const uint i, CS_FOUR_STREAMS, uint2* pair, uint* vertex_face)
-{
-  if (i < n0) {
-    *pair = pairs0[i];
-    *vertex_face = vertex_face0;
-  } else if (i < n0 + n1) {
-    *pair = pairs1[i - n0];
-    *vertex_face = vertex_face1;
-  } else if (i < n0 + n1 + n2) {
-    *pair = pairs2[i - n0 - n1];
-    *vertex_face = vertex_face2;
-  } else if (i < n0 + n1 + n2 + n3) {
-    *pair = pairs3[i - n0 - n1 - n2];
-    *vertex_face = vertex_face3;
-  } else {
-    return 0;
-  }
-  return 1;
-}
+CS_DEFINE_STREAM_ITEM(uint2)
 
 /* The cubic solver, to the end: colliding pairs are emitted as contacts of their kind. */
-__kernel void cs_cubic_pairs(CS_FOUR_STREAMS, __global const real* x0, __global const real* x1,
+__kernel void cs_cubic_pairs(CS_FOUR_STREAMS(uint2), __global const real* x0, __global const real* x1,
                              __global const uint* faces, __global const uint* edges, const uint exact_input,
                              const real tolerance, const real separation, const uint use_filter,
                              CS_EMITTER_PARAMS(uint4, vf_contacts), CS_EMITTER_PARAMS(uint4, ee_contacts))
@@ -50,7 +25,7 @@ __kernel void cs_cubic_pairs(CS_FOUR_STREAMS, __global const real* x0, __global 
   CS_EMITTER_BEGIN(ee_contacts);
   uint2 pair;
   uint vertex_face;
-  if (cs_candidate(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face)) {
+  if (cs_stream_item_uint2(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face)) {
     real q[24];
     cs_pair_points(pair, vertex_face, x0, x1, faces, edges, q);
     const cs_query query = cs_points_query(q, exact_input);
@@ -89,14 +64,14 @@ inline int cs_screen_open(const uint2 pair, const uint vertex_face, __global con
  * bounds over the whole parameter box settle most pairs at once; the rest are emitted
  * as (a, b, vertex_face, 0) for refinement (refine.cl), one list for all kinds so that
  * its rounds are paid once. */
-__kernel void cs_screen_pairs(CS_FOUR_STREAMS, __global const real* x0, __global const real* x1,
+__kernel void cs_screen_pairs(CS_FOUR_STREAMS(uint2), __global const real* x0, __global const real* x1,
                               __global const uint* faces, __global const uint* edges, const uint exact_input,
                               const real separation, const uint use_filter, CS_EMITTER_PARAMS(uint4, unresolved))
 {
   CS_EMITTER_BEGIN(unresolved);
   uint2 pair;
   uint vertex_face;
-  if (cs_candidate(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face) &&
+  if (cs_stream_item_uint2(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face) &&
       cs_screen_open(pair, vertex_face, x0, x1, faces, edges, exact_input, separation, use_filter))
     CS_EMIT(unresolved, (uint4)(pair, vertex_face, 0u));
   CS_EMITTER_END(unresolved);

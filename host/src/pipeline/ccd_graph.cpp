@@ -1,3 +1,5 @@
+#include "stream_args.hpp"
+
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/geometry/float_bounds.hpp>
@@ -213,28 +215,19 @@ runtime::PassSpec& geometry_args(runtime::PassSpec& pass, const TestInputs& in, 
       .arg(value_of(cl_uint(precision == Precision::double_)));
 }
 
-// Kernels over every candidate (or contact) stream of a step in one launch take four
-// (pairs, count, vertex_face) triples, the unused ones counting 0 (cs_cubic_pairs,
-// cs_screen_pairs, cs_earliest_toi): the pass launches over them all and takes them as
-// its first arguments.
+// A pass over every candidate (or contact) stream of a step in one launch
+// (cs_cubic_pairs, cs_screen_pairs, cs_earliest_toi) launches over them all and takes
+// their triples as its first arguments.
 void over_streams(runtime::PassSpec& pass, const std::vector<std::pair<runtime::StreamId, ContactKind>>& streams,
                   const char* what)
 {
   using namespace runtime;
-  constexpr std::size_t inputs = 4;
-  if (streams.empty() || streams.size() > inputs)
-    throw Error(std::string(what) + " takes 1 to " + std::to_string(inputs) + " streams, not " +
-                std::to_string(streams.size()));
   std::vector<StreamId> over;
   for (const auto& s : streams) over.push_back(s.first);
+  bind_four_streams(streams, what, [&](StreamId stream, bool used, cl_uint vertex_face) {
+    pass.arg(buffer_of(stream)).arg(used ? count_of(stream) : value_of(cl_uint(0))).arg(value_of(vertex_face));
+  });
   pass.launch_over(over);
-  for (std::size_t k = 0; k < inputs; ++k) {
-    const bool used = k < streams.size();
-    const auto& [stream, kind] = streams[used ? k : 0];
-    pass.arg(buffer_of(stream))
-        .arg(used ? count_of(stream) : value_of(cl_uint(0)))
-        .arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
-  }
 }
 
 }  // namespace

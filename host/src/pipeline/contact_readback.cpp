@@ -1,4 +1,5 @@
 #include "contact_readback.hpp"
+#include "stream_args.hpp"
 
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
@@ -67,18 +68,12 @@ void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& stre
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
   const std::uint64_t launches = context_.kernel_launches();
-  constexpr std::size_t inputs = 4;  // cs_contact_records
-  if (streams.contacts.size() > inputs)
-    throw runtime::Error("contact records: " + std::to_string(streams.contacts.size()) +
-                         " contact streams, more than " + std::to_string(inputs));
   unsigned a = 0;
-  for (std::size_t k = 0; k < inputs; ++k) {
-    const bool used = k < streams.contacts.size();
-    const auto& [stream, kind] = streams.contacts[used ? k : 0];
+  bind_four_streams(streams.contacts, "contact records", [&](runtime::StreamId stream, bool used, cl_uint vertex_face) {
     make_records_.set_arg(a++, scheduler.buffer(stream));
     make_records_.set_arg(a++, cl_uint(used ? scheduler.count(stream) : 0));
-    make_records_.set_arg(a++, cl_uint(kind == ContactKind::vertex_face));
-  }
+    make_records_.set_arg(a++, vertex_face);
+  });
   make_records_.set_arg(a++, cl_uint(double_time_));
   make_records_.set_arg(a++, scheduler.buffer(streams.faces));
   make_records_.set_arg(a++, scheduler.buffer(streams.edges));
