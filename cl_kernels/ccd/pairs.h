@@ -5,10 +5,10 @@
  * reals a vertex. */
 #include "query.h"
 
-inline void cs_pair_points(const uint2 p, const uint vertex_face, __global const real* x0, __global const real* x1,
-                           __global const uint* faces, __global const uint* edges, real out[24])
+/* The pair's four vertices: the vertex and the face's three, or both edges' two. */
+inline void cs_pair_vertices(const uint2 p, const uint vertex_face, __global const uint* faces,
+                             __global const uint* edges, uint v[4])
 {
-  uint v[4];
   if (vertex_face) {
     v[0] = p.x;
     v[1] = faces[3 * p.y];
@@ -20,11 +20,24 @@ inline void cs_pair_points(const uint2 p, const uint vertex_face, __global const
     v[2] = edges[2 * p.y];
     v[3] = edges[2 * p.y + 1];
   }
+}
+
+/* Four vertices' positions at both ends of the step: x0's then x1's. */
+inline void cs_vertex_points(const uint v[4], __global const real* x0, __global const real* x1, real out[24])
+{
   for (int i = 0; i < 4; ++i)
     for (int k = 0; k < 3; ++k) {
       out[3 * i + k] = x0[3 * v[i] + k];
       out[12 + 3 * i + k] = x1[3 * v[i] + k];
     }
+}
+
+inline void cs_pair_points(const uint2 p, const uint vertex_face, __global const real* x0, __global const real* x1,
+                           __global const uint* faces, __global const uint* edges, real out[24])
+{
+  uint v[4];
+  cs_pair_vertices(p, vertex_face, faces, edges, v);
+  cs_vertex_points(v, x0, x1, out);
 }
 
 /* Exact inputs are the data itself; float inputs were rounded to nearest from the

@@ -19,6 +19,7 @@
 
 #define CS_FLAG_SLACK 1u
 #define CS_FLAG_LIMIT 2u
+#define CS_FLAG_VERTEX_FACE 4u
 /* Budgets beyond the caller's work limit, after which a query answers as out of work:
  * rounds deeper than any box a precision can still halve in all three parameters for
  * a useful query, and boxes a query holds at once, which bounds the list's memory when
@@ -34,19 +35,20 @@
  * double where the device has 64-bit atomics; elsewhere (an HD 5870) it is the time
  * rounded down to float. Pruning with that rounded-down time only drops boxes that
  * start after it, so the answer is still no later than any contact: it is the earliest
- * contact the 64-bit key would give, rounded down to float. */
+ * contact the 64-bit key would give, rounded down to float.
+ * cs_key_lower(p, seen, k) lowers *p to k, given a value `seen` that *p held before:
+ * keys only fall, so where k is no lower than that, there is nothing to do. */
 #if CS_REAL_DOUBLE && CS_HAS_INT64_ATOMICS
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 typedef ulong cs_key;
 inline cs_key cs_key_of(const real t) { return as_ulong(t); }
 inline real cs_time_of(const cs_key k) { return as_double(k); }
-inline void cs_key_min(volatile __global cs_key* p, const cs_key k)
+inline void cs_key_lower(volatile __global cs_key* p, cs_key seen, const cs_key k)
 {
-  cs_key old = atom_add(p, (cs_key)0);
-  while (k < old) {
-    const cs_key seen = atom_cmpxchg(p, old, k);
-    if (seen == old) break;
-    old = seen;
+  while (k < seen) {
+    const cs_key old = atom_cmpxchg(p, seen, k);
+    if (old == seen) break;
+    seen = old;
   }
 }
 #else
@@ -62,23 +64,26 @@ inline cs_key cs_key_of(const real t)
 inline cs_key cs_key_of(const real t) { return as_uint(t); }
 #endif
 inline real cs_time_of(const cs_key k) { return (real)as_float(k); }
-inline void cs_key_min(volatile __global cs_key* p, const cs_key k)
+inline void cs_key_lower(volatile __global cs_key* p, const cs_key seen, const cs_key k)
 {
-  if (k < *p) atomic_min(p, k);
+  if (k < seen) atomic_min(p, k);
 }
 #endif
 
-/* 8 + 6 reals bytes (host: refine_item_bytes). */
+/* 8 + 6 reals bytes (host: add_elementary_tests). */
 typedef struct {
   uint query, work;
   cs_box box;
 } cs_item;
 
-/* 2 keys + 16 bytes, at most 2 reals + 16 (host: refine_state_bytes). */
+/* 2 keys + 32 bytes, at most 2 reals + 32 (host: add_elementary_tests). The seed looks
+ * up the query's vertices once: a round's visit of a box is a chain of dependent reads,
+ * one link shorter without the face's or the edges' indices. */
 typedef struct {
   cs_key best[2];
   uint work[3];
   uint flags;
+  uint vertices[4];
 } cs_refine_state;
 
 /* queries: (a, b, vertex_face, 0) as the screen emits them (narrow_phase_pairs.cl). */
@@ -132,14 +137,19 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   root.work = 0;
   root.box = cs_root_box();
   list[i] = root;
+  const uint4 pair = queries[i];
+  cs_refine_state s;
+  s.best[0] = s.best[1] = cs_key_of(2); /* no contact */
+  s.work[0] = s.work[1] = s.work[2] = 0;
+  s.flags = pair.z ? CS_FLAG_VERTEX_FACE : 0u;
+  cs_pair_vertices(pair.xy, pair.z, faces, edges, s.vertices);
   /* In single precision only. In double, where the search's answers are within rounding
    * of the exact time, a contact found early leaves the root box's halves to be cut
    * short by the tolerance before it: the median error of the times on the real steps
    * grew to the tolerance (armadillo-rollers 7e-11 -> 1e-5), for steps at most 8% faster. */
   if (!CS_REAL_DOUBLE) {
-    const uint4 pair = queries[i];
     real q[24];
-    cs_pair_points(pair.xy, pair.z, x0, x1, faces, edges, q);
+    cs_vertex_points(s.vertices, x0, x1, q);
     const cs_query query = cs_points_query(q, exact_input);
     cs_item guess = root;
     if (cs_guess_box(q, &query, (int)pair.z, tolerance, &guess.box)) {
@@ -147,10 +157,6 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
       if (at < capacity) list[at] = guess;
     }
   }
-  cs_refine_state s;
-  s.best[0] = s.best[1] = cs_key_of(2); /* no contact */
-  s.work[0] = s.work[1] = s.work[2] = 0;
-  s.flags = 0;
   state[i] = s;
 }
 
@@ -167,20 +173,22 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
     if (i < items) {
       const cs_item it = in[i];
       __global cs_refine_state* s = state + it.query;
-      const real before = cs_time_of(s->best[1 - now]);
-      const uint last_splits = s->work[(round + 2) % 3]; /* this round's boxes, halved */
+      const cs_refine_state seen = *s;
+      const real before = cs_time_of(seen.best[1 - now]);
+      const uint last_splits = seen.work[(round + 2) % 3]; /* this round's boxes, halved */
       const uint work = it.work + last_splits;
-      s->work[(round + 1) % 3] = 0;
-      const uint4 query = queries[it.query];
-      const int vertex_face = (int)query.z;
-      const cs_query q = cs_pair_query(query.xy, query.z, x0, x1, faces, edges, exact_input);
+      const int vertex_face = (seen.flags & CS_FLAG_VERTEX_FACE) != 0;
+      real points[24];
+      cs_vertex_points(seen.vertices, x0, x1, points);
+      const cs_query q = cs_points_query(points, exact_input);
       const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
       const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
       int slack = 0, limited = 0;
       real t = before;
       visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
                            out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
-      cs_key_min(&s->best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
+      cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
+      s->work[(round + 1) % 3] = 0;
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
       if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
         atomic_inc(&s->work[round % 3]);
