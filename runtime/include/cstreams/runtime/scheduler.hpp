@@ -51,8 +51,9 @@ struct RunStats {
   unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
   std::size_t scratch_bytes = 0;    // segments (each buffer once), flags, offsets and scan levels
   std::size_t segment_bytes = 0;    // the registration segments alone, each buffer once
-  unsigned slices = 1;              // of the sliced pass's input (1: the run was not sliced)
-  std::string sliced_pass;          // the pass whose input went in slices, if any
+  unsigned slices = 1;              // of the sliced pass's input (1: not sliced, or in one slice)
+  std::string sliced_pass;          // the pass whose input went in slices (of the global
+                                    // counter, one where it fitted one), if any
 };
 
 // Runs a StreamGraph on one device. It builds every kernel at construction, owns the
@@ -71,9 +72,12 @@ struct RunStats {
 // in the first slice, and the launch streams those passes emit into the sliced ones
 // count only there. Streams marked StreamGraph::gather collect every slice's items;
 // other outputs of the sliced passes hold the last slice's. Slices double until one
-// fits; a scheduler keeps its number of slices for the runs after, so that a step
-// under a memory budget does not fail first each time. A slice's work-items count from
-// 0, so a pass that may be sliced emits what it reads, not its position in its input.
+// fits; a scheduler keeps the size of the largest slice that fitted for the runs
+// after, so that a step under a memory budget does not fail first each time, and cuts
+// a later input into as many slices of that size as it needs: fewer for a smaller
+// input, one (still through the global counter) where it fits one. A slice's
+// work-items count from 0, so a pass that may be sliced emits what it reads, not its
+// position in its input.
 class Scheduler {
 public:
   Scheduler(Context& context, StreamGraph graph, SchedulerOptions options = {});
