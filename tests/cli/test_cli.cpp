@@ -1,6 +1,7 @@
 // The command line's parsing phase: every bad flag is refused, naming it, before any
 // scene is read, device opened or file written.
 #include "../support/benchmark_data.hpp"
+#include "../support/scratch.hpp"
 
 #include <commands.hpp>
 #include <inputs.hpp>
@@ -50,14 +51,7 @@ std::string funnel_frame(const char* name)
   return cstreams::test::benchmark_path(std::string("scalable-ccd-sample/cloth-funnel/frames/") + name);
 }
 
-// An empty folder of that name in the temporary directory.
-fs::path fresh_dir(const char* name)
-{
-  const fs::path dir = fs::temp_directory_path() / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path fresh_dir(const char* name) { return cstreams::test::fresh_scratch(name); }
 
 // Parses and runs a command line as the program would.
 void execute(std::vector<std::string> args)

@@ -2,6 +2,7 @@
 // kernels that fail to build. Each is an error naming what failed; nothing is reported
 // as "no collision" for a step that did not run; the context stays usable.
 #include "../support/benchmark_data.hpp"
+#include "../support/scratch.hpp"
 #include "../support/test_device.hpp"
 #include "../support/test_scenes.hpp"
 
@@ -80,7 +81,7 @@ TEST_CASE("a kernel that fails to build is named with its log, and the context b
 {
   const Scene scene = cstreams::test::cloth_funnel();
   const Step step = load_step(scene, 0);
-  const auto dir = std::filesystem::temp_directory_path() / "cstreams-broken-kernels";
+  const auto dir = cstreams::test::fresh_scratch("broken-kernels");
   std::filesystem::create_directories(dir / "ccd");
   std::ofstream(dir / "ccd" / "refine.cl") << "__kernel void cs_refine_round(undeclared_type x) {}\n";
 

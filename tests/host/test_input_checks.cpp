@@ -1,5 +1,6 @@
 // Options and files a user gets wrong: each is refused with a message naming the
 // option or the file, before any work, and changes nothing.
+#include "../support/scratch.hpp"
 #include "../support/test_device.hpp"
 
 #include <cstreams/detector.hpp>
@@ -23,13 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path scratch(const std::string& name)
-{
-  const fs::path dir = fs::temp_directory_path() / ("cstreams-input-checks-" + name);
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch(const std::string& name) { return cstreams::test::fresh_scratch("input-checks-" + name); }
 
 SceneDescription two_balls()
 {

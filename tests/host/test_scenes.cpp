@@ -1,3 +1,5 @@
+#include "../support/scratch.hpp"
+
 #include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/generators.hpp>
 
@@ -11,10 +13,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The generator makes the folder itself.
 std::string fresh_folder(const std::string& name)
 {
-  const fs::path p = fs::temp_directory_path() / ("cstreams-scenes-" + name);
-  fs::remove_all(p);
+  const fs::path p = cstreams::test::fresh_scratch("scenes-" + name);
+  fs::remove(p);
   return p.string();
 }
 
@@ -28,15 +31,14 @@ std::string bytes_of(const fs::path& p)
 
 TEST_CASE("generated scenes are deterministic in their seed", "[host][scenes][quick]")
 {
-  scenes::GeneratorOptions o{"bart", fresh_folder("a"), 3, 4, 0};
+  const fs::path a = fresh_folder("a"), b = fresh_folder("b"), c = fresh_folder("c");
+  scenes::GeneratorOptions o{"bart", a.string(), 3, 4, 0};
   scenes::generate_scene(o);
-  o.folder = fresh_folder("b");
+  o.folder = b.string();
   scenes::generate_scene(o);
-  o.folder = fresh_folder("c");
+  o.folder = c.string();
   o.seed = 4;
   scenes::generate_scene(o);
-  const fs::path a = fs::temp_directory_path() / "cstreams-scenes-a", b = fs::temp_directory_path() / "cstreams-scenes-b",
-                 c = fs::temp_directory_path() / "cstreams-scenes-c";
   std::size_t files = 0;
   for (const auto& entry : fs::directory_iterator(a)) {
     const auto name = entry.path().filename();

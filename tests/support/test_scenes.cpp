@@ -1,6 +1,7 @@
 #include "test_scenes.hpp"
 
 #include "benchmark_data.hpp"
+#include "scratch.hpp"
 
 #include <cstreams/scenes/generators.hpp>
 
@@ -10,9 +11,10 @@ namespace cstreams::test {
 
 Scene generated_scene(const std::string& generator, int frames, int resolution)
 {
-  const auto folder = std::filesystem::temp_directory_path() /
-                      ("cstreams-test-" + generator + "-" + std::to_string(frames) + "-" + std::to_string(resolution));
-  std::filesystem::remove_all(folder);
+  // The generator makes the folder itself.
+  const auto folder =
+      fresh_scratch("test-" + generator + "-" + std::to_string(frames) + "-" + std::to_string(resolution));
+  std::filesystem::remove(folder);
   return load_scene(scenes::generate_scene({generator, folder.string(), 1, frames, resolution}));
 }
 
