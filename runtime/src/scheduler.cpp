@@ -1001,10 +1001,13 @@ struct Scheduler::State {
   // The pass that runs in slices (SIZE_MAX: none) and into how many.
   std::size_t sliced_pass = SIZE_MAX;
   unsigned slices = 1;
-  // The most items a slice of pass `fitted_pass`'s input has held since its slices last
-  // ran short (0: not since): later runs cut that input into slices of this size, so
-  // that their number follows the input, down to one.
-  std::size_t fitted_slice = 0, fitted_pass = SIZE_MAX;
+  // The slices that pass `found_pass` was last found to need, by doubling them, and its
+  // input then (0: none yet). What a slice needs follows what it emits more than what
+  // it reads (a front's first pairs expand into many, later ones into few), so a run
+  // with more input starts from that number, and one with less takes as much fewer,
+  // down to one.
+  unsigned found_slices = 0;
+  std::size_t found_input = 0, found_pass = SIZE_MAX;
   std::size_t slices_left = 0;  // after the one running
   std::size_t flush_failure = SIZE_MAX;  // the pass whose output a flush had no memory for, if slices may start there
 
@@ -1074,20 +1077,24 @@ struct Scheduler::State {
     for (std::uint32_t i = 0; i < streams.size(); ++i)
       if (sliced[i] && spec(StreamId{i}).variable) outputs.push_back(StreamId{i});
     const std::size_t total = state(over).count;
-    if (first != fitted_pass) fitted_slice = 0;
-    slices = fitted_slice > 0 ? unsigned(std::min<std::size_t>((total + fitted_slice - 1) / fitted_slice, 1u << 30))
-                              : std::max(slices, 2u);
+    bool found = first == found_pass && found_input > 0;
+    slices = found ? unsigned(std::max<std::size_t>(
+                         1, (found_slices * std::min(total, found_input) + found_input - 1) / found_input))
+                   : std::max(slices, 2u);
     for (;;) {
       const std::size_t size = slice_items(over, total);
       try {
         run_slices(first, every_slice, outputs, once, size);
-        fitted_slice = std::max(fitted_slice, size);
-        fitted_pass = first;
+        if (!found) {
+          found_slices = slices;
+          found_input = total;
+          found_pass = first;
+        }
         return;
       } catch (const DeviceMemoryExhausted&) {
         if (size <= slice_items(over, 0) || slices >= (1u << 30)) throw;
-        fitted_slice = 0;
         slices = std::max(2 * slices, 2u);
+        found = false;
       }
     }
   }

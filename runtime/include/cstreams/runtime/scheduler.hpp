@@ -72,10 +72,10 @@ struct RunStats {
 // in the first slice, and the launch streams those passes emit into the sliced ones
 // count only there. Streams marked StreamGraph::gather collect every slice's items;
 // other outputs of the sliced passes hold the last slice's. Slices double until one
-// fits; a scheduler keeps the size of the largest slice that fitted for the runs
-// after, so that a step under a memory budget does not fail first each time, and cuts
-// a later input into as many slices of that size as it needs: fewer for a smaller
-// input, one (still through the global counter) where it fits one. A slice's
+// fits; a scheduler keeps their number and the input they cut for the runs after, so
+// that a step under a memory budget does not fail first each time: a larger input
+// starts from that number, a smaller one takes as much fewer slices, down to one
+// (still through the global counter). A slice's
 // work-items count from 0, so a pass that may be sliced emits what it reads, not its
 // position in its input.
 class Scheduler {
