@@ -75,9 +75,8 @@ struct RunStats {
 // fits; a scheduler keeps their number and the input they cut for the runs after, so
 // that a step under a memory budget does not fail first each time: a larger input
 // starts from that number, a smaller one takes as much fewer slices, down to one
-// (still through the global counter). A slice's
-// work-items count from 0, so a pass that may be sliced emits what it reads, not its
-// position in its input.
+// (still through the global counter). A slice's work-items count from 0, so a pass
+// that may be sliced emits what it reads, not its position in its input.
 class Scheduler {
 public:
   Scheduler(Context& context, StreamGraph graph, SchedulerOptions options = {});
