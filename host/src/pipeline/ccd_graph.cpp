@@ -302,8 +302,9 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   // One box a work-item, breadth first across the device (refine.cl): an item is a
   // query index, its work and a box of six reals; the state of a query two keys of at
   // most one real each (a float on devices without 64-bit atomics) and eight words.
-  // The round kernel holds 168 registers a work-item on the H200: in groups of 256 one
-  // group fits an SM, in groups of 64 six do, and its rounds take a fifth less time.
+  // The round kernel is heavy in registers (255 a work-item in double on the H200): in
+  // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
+  // 256 (BENCHMARKS.md).
   constexpr std::size_t refine_group = 64;
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
   auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", options})
