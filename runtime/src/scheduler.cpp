@@ -1093,7 +1093,7 @@ struct Scheduler::State {
         return;
       } catch (const DeviceMemoryExhausted&) {
         if (size <= slice_items(over, 0) || slices >= (1u << 30)) throw;
-        slices = std::max(2 * slices, 2u);
+        slices *= 2;
         found = false;
       }
     }

@@ -83,8 +83,10 @@ struct TestInputs {
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
 };
 
-// The arguments every kernel over candidate pairs starts with (narrow_phase_pairs.cl,
-// refine.cl): the pairs, their count, their kind, positions, topology, exactness.
+// The arguments a kernel over one stream of candidate pairs starts with
+// (cs_filter_flags in narrow_phase_pairs.cl): the pairs, their count, their kind,
+// positions, topology, exactness. Kernels over every candidate stream at once take
+// four (pairs, count, kind) triples instead (add_elementary_tests).
 runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& inputs, runtime::StreamId pairs,
                                     ContactKind kind, Precision precision);
 // A length or tolerance as a kernel of this precision takes it: in float, rounded up.
