@@ -22,7 +22,7 @@ void sort_canonical(std::vector<Contact>& contacts)
   tbb::parallel_sort(contacts.begin(), contacts.end(), canonical_less);
 }
 
-void write_contacts_csv(std::ostream& out, const std::vector<Contact>& contacts)
+void write_contacts_csv(std::ostream& out, ContactSpan contacts)
 {
   out << "kind,object_a,object_b,v0,v1,v2,v3,toi\n";
   char row[160];
@@ -33,7 +33,7 @@ void write_contacts_csv(std::ostream& out, const std::vector<Contact>& contacts)
   }
 }
 
-void write_contacts_csv(const std::string& path, const std::vector<Contact>& contacts)
+void write_contacts_csv(const std::string& path, ContactSpan contacts)
 {
   write_file_atomically(path, [&](std::ostream& out) { write_contacts_csv(out, contacts); });
 }

@@ -4,16 +4,24 @@
 #include "../support/test_scenes.hpp"
 
 #include <cstreams/pipeline/ccd_graph.hpp>
+#include <cstreams/pipeline/narrow_phase.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
+#include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/kernel.hpp>
 #include <cstreams/scenes/shapes.hpp>
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <iterator>
+#include <limits>
 
 using namespace cstreams;
 
@@ -390,6 +398,63 @@ TEST_CASE("device contacts equal the solver's on the host's candidates, in both 
     }
     detector.detect(Report::earliest_toi);
     CHECK_THROWS_WITH(detector.contacts(), Catch::Contains("earliest"));
+  }
+}
+
+// cs_contacts_as_host on records made by hand: the host reads its output as Contacts,
+// so every field must land where Contact keeps it, and a float time must widen to the
+// very double the float is (subnormals too, which the kernel widens bit by bit).
+TEST_CASE("contacts come back laid out as the host's Contact, times widened exactly", "[detector][quick]")
+{
+  runtime::Context& context = cstreams::test::device();
+  context.programs().add_sources(ccd_kernel_sources());
+  const runtime::Kernel as_host = context.programs().kernel("ccd/contacts.cl", "cs_contacts_as_host");
+  const float floats[] = {0.0f,
+                          std::numeric_limits<float>::denorm_min(),
+                          3e-40f,
+                          std::nextafter(std::numeric_limits<float>::min(), 0.0f),
+                          std::numeric_limits<float>::min(),
+                          1e-7f,
+                          0.7f,
+                          1.0f};
+  const double doubles[] = {0.0, std::numeric_limits<double>::denorm_min(), 1e-310, 0.3, 1.0 - 1e-16, 1.0};
+  for (const bool double_time : {false, true}) {
+    INFO((double_time ? "double" : "single") << " times");
+    std::vector<double> times;
+    std::vector<std::uint32_t> records;
+    const std::size_t n = double_time ? std::size(doubles) : std::size(floats);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::uint32_t time_words[2] = {0, 0};
+      if (double_time) {
+        std::uint64_t bits;
+        std::memcpy(&bits, &doubles[i], sizeof bits);
+        time_words[0] = std::uint32_t(bits >> 32);
+        time_words[1] = std::uint32_t(bits);
+        times.push_back(doubles[i]);
+      } else {
+        std::memcpy(&time_words[0], &floats[i], sizeof(float));
+        times.push_back(double(floats[i]));
+      }
+      const std::uint32_t kind = i % 2, object_a = 0x7fffffffu - std::uint32_t(i), object_b = 7 * std::uint32_t(i);
+      const std::uint32_t record[8] = {kind << 31 | object_a, object_b, 11, 12, 13, 4000000000u, time_words[0],
+                                       time_words[1]};
+      records.insert(records.end(), std::begin(record), std::end(record));
+    }
+    runtime::Buffer in(context, records.size() * sizeof(std::uint32_t), "records");
+    runtime::Buffer out(context, n * sizeof(Contact), "contacts");
+    context.write(in, records.data(), records.size() * sizeof(std::uint32_t));
+    as_host.set_args(in, cl_uint(n), cl_uint(double_time), out);
+    context.launch(as_host, n, context.work_group_size());
+    std::vector<Contact> got(n);
+    context.read(out, got.data(), n * sizeof(Contact));
+    for (std::size_t i = 0; i < n; ++i) {
+      INFO("contact " << i);
+      CHECK(got[i].kind == (i % 2 ? ContactKind::edge_edge : ContactKind::vertex_face));
+      CHECK(got[i].object_a == 0x7fffffffu - i);
+      CHECK(got[i].object_b == 7 * i);
+      CHECK(got[i].v == std::array<std::uint32_t, 4>{11, 12, 13, 4000000000u});
+      CHECK(got[i].toi == times[i]);
+    }
   }
 }
 

@@ -75,7 +75,7 @@ bool file_exists(const std::string& path)
 }
 
 // Every pair the ground truth marks true is among `contacts`.
-void check_recall(const RealStep& s, const Step& step, const std::vector<Contact>& contacts)
+void check_recall(const RealStep& s, const Step& step, ContactSpan contacts)
 {
   const GroundTruth truth = ground_truth(s, step);
   auto key = [](const Contact& c) { return std::make_tuple(c.kind, c.v); };

@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <iosfwd>
 #include <string>
@@ -28,6 +29,29 @@ struct Contact {
   }
 };
 
+// Contacts held elsewhere, read in place. Detector::contacts() hands out the last
+// step's where the device's read put them: valid until that detector's next detect()
+// or its end. Copy them into a std::vector to keep them longer.
+class ContactSpan {
+public:
+  ContactSpan() = default;
+  ContactSpan(const Contact* data, std::size_t size) : data_(data), size_(size) {}
+  ContactSpan(const std::vector<Contact>& contacts) : data_(contacts.data()), size_(contacts.size()) {}
+
+  const Contact* data() const { return data_; }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const Contact* begin() const { return data_; }
+  const Contact* end() const { return data_ + size_; }
+  const Contact& operator[](std::size_t i) const { return data_[i]; }
+  // A copy that the next step leaves alone.
+  operator std::vector<Contact>() const { return {begin(), end()}; }
+
+private:
+  const Contact* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
 bool canonical_less(const Contact& a, const Contact& b);
 // Sorts by kind, objects and vertex ids (then time), so lists from two devices or two
 // runs compare with diff.
@@ -35,7 +59,7 @@ void sort_canonical(std::vector<Contact>& contacts);
 
 // CSV: a header `kind,object_a,object_b,v0,v1,v2,v3,toi`, then one row per contact
 // with kind `vf` or `ee` and the time printed exactly (17 significant digits).
-void write_contacts_csv(std::ostream& out, const std::vector<Contact>& contacts);
-void write_contacts_csv(const std::string& path, const std::vector<Contact>& contacts);
+void write_contacts_csv(std::ostream& out, ContactSpan contacts);
+void write_contacts_csv(const std::string& path, ContactSpan contacts);
 
 }  // namespace cstreams

@@ -125,8 +125,9 @@ public:
   // detector (on a new context after a lost device).
   void detect(Report report = Report::contacts);
 
-  // The last step's contacts in canonical order (needs Report::contacts).
-  const std::vector<Contact>& contacts() const;
+  // The last step's contacts in canonical order (needs Report::contacts), read in
+  // place: valid until the next detect(). Copy them into a std::vector to keep them.
+  ContactSpan contacts() const;
   // Per object, the earliest time of impact in the last step (1 without contact),
   // rounded down to float.
   std::vector<double> earliest_toi() const;

@@ -4,12 +4,10 @@
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
+#include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <string>
+#include <type_traits>
 
 namespace cstreams {
 
@@ -17,23 +15,11 @@ namespace {
 
 constexpr std::size_t record_words = 8;  // cs_contact_records
 
-Contact from_record(const cl_uint* r, bool double_time)
-{
-  Contact c;
-  c.kind = r[0] >> 31 ? ContactKind::edge_edge : ContactKind::vertex_face;
-  c.object_a = r[0] & 0x7fffffffu;
-  c.object_b = r[1];
-  c.v = {r[2], r[3], r[4], r[5]};
-  if (double_time) {
-    const std::uint64_t bits = std::uint64_t(r[6]) << 32 | r[7];
-    std::memcpy(&c.toi, &bits, sizeof bits);
-  } else {
-    float toi;
-    std::memcpy(&toi, &r[6], sizeof toi);
-    c.toi = toi;
-  }
-  return c;
-}
+// cs_contacts_as_host writes Contacts word by word; the host reads them in place.
+static_assert(std::is_trivially_copyable_v<Contact> && std::is_standard_layout_v<Contact>);
+static_assert(sizeof(ContactKind) == 1 && sizeof(Contact) == 40 && offsetof(Contact, object_a) == 4 &&
+                  offsetof(Contact, object_b) == 8 && offsetof(Contact, v) == 12 && offsetof(Contact, toi) == 32,
+              "Contact's layout is the one cs_contacts_as_host writes");
 
 }  // namespace
 
@@ -42,6 +28,7 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
     : context_(context),
       double_time_(precision == Precision::double_),
       make_records_(context.programs().kernel("ccd/contacts.cl", "cs_contact_records")),
+      as_host_(context.programs().kernel("ccd/contacts.cl", "cs_contacts_as_host")),
       sorter_(context, record_words)
 {
   std::vector<cl_uint> first_vertex(scene.objects.size());
@@ -50,18 +37,18 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
   context.write(first_vertex_, first_vertex.data(), first_vertex.size() * sizeof(cl_uint));
 }
 
-void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
-                           runtime::PassStats& stats, std::vector<Contact>& contacts)
+ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
+                                  runtime::PassStats& stats)
 {
   stats = runtime::PassStats{};
   stats.name = "canonical contacts";
   std::size_t n = 0;
   for (const auto& found : streams.contacts) n += scheduler.count(found.first);
-  contacts.resize(n);
-  if (n == 0) return;
+  if (n == 0) return {};
   runtime::allocate_making_room(
       [&] {
         runtime::ensure_capacity(context_, records_, n * record_words * sizeof(cl_uint), "contact records");
+        runtime::ensure_capacity(context_, contacts_, n * sizeof(Contact), "contacts");
         sorter_.reserve(n);
       },
       [&] { return scheduler.release_idle_scratch(); });
@@ -82,17 +69,18 @@ void ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& stre
   make_records_.set_arg(a++, records_);
   context_.launch(make_records_, n, context_.work_group_size(), events, stats.name);
   const runtime::Buffer& sorted = sorter_.sort(records_, n, events, stats.name.c_str());
+  as_host_.set_args(sorted, cl_uint(n), cl_uint(double_time_), contacts_);
+  context_.launch(as_host_, n, context_.work_group_size(), events, stats.name);
   stats.launches = unsigned(context_.kernel_launches() - launches);
-  const std::size_t bytes = n * record_words * sizeof(cl_uint);
-  runtime::ensure_capacity(context_, staging_, bytes, "contact records");
-  context_.read(sorted, staging_.data(), bytes);
+  const std::size_t bytes = n * sizeof(Contact);
+  runtime::ensure_capacity(context_, staging_, bytes, "contacts");
+  context_.read(contacts_, staging_.data(), bytes);
   for (const auto& e : timeline.resolve()) stats.device_ns += e.nanoseconds;
   stats.scratch_bytes = scratch_bytes();
-
-  const auto* words = static_cast<const cl_uint*>(staging_.data());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) contacts[i] = from_record(words + i * record_words, double_time_);
-  });
+  // The read wrote Contacts' bytes into memory the host never constructed objects in:
+  // Contact is trivially copyable, an implicit-lifetime type (P0593), so the read
+  // creates them as memcpy would.
+  return {static_cast<const Contact*>(staging_.data()), n};
 }
 
 }  // namespace cstreams

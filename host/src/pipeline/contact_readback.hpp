@@ -12,7 +12,6 @@
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
-#include <vector>
 
 namespace cstreams {
 
@@ -21,24 +20,23 @@ public:
   ContactReadback(runtime::Context& context, const SceneLayout& layout, const SceneDescription& scene,
                   Precision precision);
 
-  // Replaces `contacts` with those of the scheduler's last run, in canonical order.
-  // `stats` receives the device time (with `profile`) and the launches it took. Host
-  // memory is kept from step to step (`contacts` only shrinks or grows by the change
-  // in count), and the records are turned into contacts on every core: on one core
-  // that had cost more than the transfer on cloth-ball. Short of device memory for its
-  // records, it has the scheduler give back its idle scratch.
-  void read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats,
-            std::vector<Contact>& contacts);
-  std::size_t scratch_bytes() const { return records_.bytes() + sorter_.scratch_bytes(); }
+  // The contacts of the scheduler's last run, in canonical order, where the read put
+  // them: valid until the next read. `stats` receives the device time (with `profile`)
+  // and the launches it took. Short of device memory for its records, it has the
+  // scheduler give back its idle scratch.
+  ContactSpan read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats);
+  std::size_t scratch_bytes() const { return records_.bytes() + contacts_.bytes() + sorter_.scratch_bytes(); }
 
 private:
   runtime::Context& context_;
   bool double_time_;
   runtime::Kernel make_records_;
+  runtime::Kernel as_host_;
   runtime::Sorter sorter_;
   runtime::Buffer first_vertex_;  // per object
   runtime::Buffer records_;
-  runtime::HostStaging staging_;  // the sorted records as read
+  runtime::Buffer contacts_;       // the sorted records as the host's Contacts
+  runtime::HostStaging staging_;  // and as read, handed out in place
 };
 
 }  // namespace cstreams

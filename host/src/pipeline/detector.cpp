@@ -117,7 +117,7 @@ struct Detector::State {
   ContactReadback readback;
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
-  std::vector<Contact> contacts;
+  ContactSpan contacts;  // in the readback's host memory
   bool have_contacts = false;
   DetectorStats stats;
   // Why a step failed part-way on the device (its streams, front and positions are then
@@ -221,7 +221,7 @@ void Detector::run_step(Report report)
   stats.run = q.stats();
   if (report == Report::contacts) {
     runtime::PassStats readback;
-    s.readback.read(q, st, s.options.profile, readback, s.contacts);
+    s.contacts = s.readback.read(q, st, s.options.profile, readback);
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
   }
@@ -241,7 +241,7 @@ void Detector::run_step(Report report)
   stats.host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
 }
 
-const std::vector<Contact>& Detector::contacts() const
+ContactSpan Detector::contacts() const
 {
   state_->check_usable();
   if (!state_->have_contacts) throw Error("the last step read back only the earliest times; detect(Report::contacts)");
