@@ -34,28 +34,54 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
 }
 
 /* Segmented-lock segments planned from the last run (cs_segment_base), then the spill
- * pool: group g < segments copies segment g, the groups after them the spilled items,
- * a work-item each. A segment holds about one emitting group's items, so a group starts
- * from its segment's bounds alone; one work-item per slot would first search for its
- * segment, a chain of dependent reads that held every group up. A spilled item's group
- * and rank follow the counts. Work-item 0 also completes `offsets` with the total at
- * [segments], so that they plan the next run's segments. */
+ * pool. Each of the first groups copies `per_group` neighbouring segments (at most
+ * CS_MERGE_SEGMENTS and the group's size), the groups after them the spilled items, a
+ * work-item each. A group first reads its segments' bounds, then copies them as one run
+ * of items, each work-item walking forward through the group's segments. Segments hold
+ * about one emitting group's items, often fewer than a group has work-items: one group
+ * a segment left most work-items idle while tens of thousands of groups waited to be
+ * dispatched (the H200 took 37 us for a front update's 19 MB of triangle pairs). A
+ * spilled item's group and rank follow the counts. Work-item 0 also completes
+ * `offsets` with the total at [segments], so that they plan the next run's segments. */
+#define CS_MERGE_SEGMENTS 64u
 __kernel void cs_merge_planned(__global const uint* items, const uint words, __global const uint* counts,
                                __global uint* offsets, const uint segments, __global const uint* plan,
                                const uint planned, const uint fresh, __global const uint* counters,
-                               const uint spill_slot, __global uint* dst, const uint capacity)
+                               const uint spill_slot, __global uint* dst, const uint capacity, const uint per_group)
 {
+  __local uint start[CS_MERGE_SEGMENTS + 1u], from[CS_MERGE_SEGMENTS], to[CS_MERGE_SEGMENTS];
   const uint g = (uint)get_group_id(0), lid = (uint)get_local_id(0), size = (uint)get_local_size(0);
   if (g == 0u && lid == 0u) offsets[segments] = offsets[segments - 1u] + counts[segments - 1u];
-  if (g < segments) {
-    const uint base = cs_segment_base(plan, planned, fresh, g);
-    const uint held = min(counts[g], cs_segment_base(plan, planned, fresh, g + 1u) - base), o = offsets[g];
-    for (uint j = lid; j < held; j += size)
-      if (o + j < capacity) cs_copy_item(items, base + j, dst, o + j, words);
+  const uint groups = (segments + per_group - 1u) / per_group;
+  /* Every group reaches the barriers, the spill pool's too: under a branch that whole
+   * groups took, pocl 3.1 lost items now and then (test_scheduler). */
+  const uint first = g * per_group, k = g < groups ? min(per_group, segments - first) : 0u;
+  if (lid < k) {
+    const uint s = first + lid, base = cs_segment_base(plan, planned, fresh, s);
+    start[lid + 1u] = min(counts[s], cs_segment_base(plan, planned, fresh, s + 1u) - base);
+    from[lid] = base;
+    to[lid] = offsets[s];
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  uint end = 0;
+  if (lid < k)
+    for (uint i = 0; i <= lid; ++i) end += start[i + 1u];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid < k) start[lid + 1u] = end;
+  if (lid == 0u) start[0] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (g < groups) {
+    uint s = 0;
+    for (uint j = lid; j < start[k]; j += size) {
+      while (start[s + 1u] <= j) ++s;
+      const uint o = to[s] + (j - start[s]);
+      if (o < capacity) cs_copy_item(items, from[s] + (j - start[s]), dst, o, words);
+    }
   } else {
-    const uint k = (g - segments) * size + lid;
-    if (k >= min(counters[spill_slot], segments * CS_SPILL_PER_GROUP)) return;
-    const uint o = offsets[counts[segments + 2u * k]] + counts[segments + 2u * k + 1u];
-    if (o < capacity) cs_copy_item(items, cs_segment_base(plan, planned, fresh, segments) + k, dst, o, words);
+    const uint x = (g - groups) * size + lid;
+    if (x < min(counters[spill_slot], segments * CS_SPILL_PER_GROUP)) {
+      const uint o = offsets[counts[segments + 2u * x]] + counts[segments + 2u * x + 1u];
+      if (o < capacity) cs_copy_item(items, cs_segment_base(plan, planned, fresh, segments) + x, dst, o, words);
+    }
   }
 }

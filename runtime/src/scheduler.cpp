@@ -667,12 +667,23 @@ struct Scheduler::State {
   void merge_segments(const PassState& p, const EmitterState& e, bool copy = true)
   {
     const auto& dst = state(e.stream);
+    const std::size_t wg = context.work_group_size(), per_group = merged_per_group(e);
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
                            cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
-                           cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0));
-    const std::size_t wg = context.work_group_size();
+                           cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group));
+    const std::size_t groups = (e.segments + per_group - 1) / per_group;
     const std::size_t spill_groups = (e.segments * spill_per_group + wg - 1) / wg;
-    context.launch(merge_planned, copy ? (e.segments + spill_groups) * wg : 1, wg, tl(), p.spec->name);
+    context.launch(merge_planned, copy ? (groups + spill_groups) * wg : 1, wg, tl(), p.spec->name);
+  }
+
+  // Segments a merging group copies: about eight groups' worth of items, judged by the
+  // plan's average segment (else the room of an unplanned one), and at most
+  // CS_MERGE_SEGMENTS (compact.cl) and a work-item each, which reads its bounds.
+  std::size_t merged_per_group(const EmitterState& e) const
+  {
+    const std::size_t wg = context.work_group_size(), most = std::min<std::size_t>(64, wg);
+    const std::size_t average = e.planned ? e.planned_total / e.planned : first_segment_capacity(e);
+    return std::clamp<std::size_t>(8 * wg / std::max<std::size_t>(average, 1), 1, most);
   }
 
   // Whether this execution packs the emitter's items into the buffer of an input
