@@ -2,7 +2,7 @@
 // The step's contacts as the user gets them, made on the device: every found pair
 // mapped to its objects and object-local vertex ids (ccd/contacts.cl), all kinds
 // sorted together into canonical order (runtime::Sorter), and read in one transfer
-// of exactly the contacts.
+// of exactly the contacts, laid out as the host's Contact (cs_contacts_as_host).
 #include <cstreams/contacts.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
@@ -11,7 +11,6 @@
 #include <cstreams/runtime/kernel.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
-
 
 namespace cstreams {
 
@@ -35,7 +34,7 @@ private:
   runtime::Sorter sorter_;
   runtime::Buffer first_vertex_;  // per object
   runtime::Buffer records_;
-  runtime::Buffer contacts_;       // the sorted records as the host's Contacts
+  runtime::Buffer contacts_;      // the sorted records as the host's Contacts
   runtime::HostStaging staging_;  // and as read, handed out in place
 };
 
