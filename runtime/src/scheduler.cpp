@@ -57,6 +57,10 @@ struct EmitterState {
 // cl_kernels/runtime/registration.h).
 constexpr std::uint64_t spill_per_group = 16;
 
+// Segmented lock: the most segments one group of the merge copies (CS_MERGE_SEGMENTS
+// in cl_kernels/runtime/compact.cl).
+constexpr std::size_t most_merged_per_group = 64;
+
 // A work list's device side (Worklist in stream_graph.hpp).
 constexpr std::size_t list_words = 10;
 
@@ -678,10 +682,10 @@ struct Scheduler::State {
 
   // Segments a merging group copies: about eight groups' worth of items, judged by the
   // plan's average segment (else the room of an unplanned one), and at most
-  // CS_MERGE_SEGMENTS (compact.cl) and a work-item each, which reads its bounds.
+  // most_merged_per_group and a work-item each, which reads its bounds.
   std::size_t merged_per_group(const EmitterState& e) const
   {
-    const std::size_t wg = context.work_group_size(), most = std::min<std::size_t>(64, wg);
+    const std::size_t wg = context.work_group_size(), most = std::min(most_merged_per_group, wg);
     const std::size_t average = e.planned ? e.planned_total / e.planned : first_segment_capacity(e);
     return std::clamp<std::size_t>(8 * wg / std::max<std::size_t>(average, 1), 1, most);
   }
