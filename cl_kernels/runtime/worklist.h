@@ -4,13 +4,20 @@
  * uses them:
  *
  *   __local uint group[2];
- *   const uint n = cs_worklist_items(counts, round, capacity);
- *   for (uint base = get_group_id(0) * get_local_size(0); base < n; base += get_global_size(0)) {
- *     const uint i = base + get_local_id(0);
- *     ... k: the items this work-item appends (none where i >= n)
- *     const uint at = cs_worklist_append(group, counts, round, k);  // every work-item of the group
- *     for (uint j = 0; j < k; ++j) if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = ...;
+ *   const uint first = cs_worklist_first_round(counts, launch);
+ *   for (uint round = first;; ++round) {
+ *     const uint n = cs_worklist_round_items(counts, launch, first, round, capacity, tail);
+ *     if (n == 0) break;
+ *     in = round % 2 ? list1 : list0, out the other;
+ *     for (uint base = get_group_id(0) * get_local_size(0); base < n; base += get_global_size(0)) {
+ *       const uint i = base + get_local_id(0);
+ *       ... k: the items this work-item appends (none where i >= n)
+ *       const uint at = cs_worklist_append(group, counts, round, k);  // every work-item of the group
+ *       for (uint j = 0; j < k; ++j) if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = ...;
+ *     }
+ *     cs_worklist_round_end();
  *   }
+ *   cs_worklist_check_loops(counts, first);
  *
  * counts[r % 3] holds the items of round r (a seed's extra first items add to
  * counts[0]). Round r appends to counts[(r + 1) % 3] and clears counts[(r + 2) % 3],
@@ -18,28 +25,67 @@
  * rounds. An append past the capacity writes nothing and raises counts[3] to the
  * capacity it needed: the host grows the lists and starts the work again. For the
  * host's statistics and its next batch, counts[4] and counts[5] add up the items of all
- * rounds (low and high word), counts[6] keeps the largest round and counts[7] the
- * number of rounds that had items.
+ * rounds (low and high word), counts[6] keeps the largest round, counts[7] the number
+ * of rounds that had items, counts[CS_LIST_TAIL_ROUNDS] those that ran in one group, and
+ * counts[CS_LIST_LOG + r] the items of round r, for the first CS_LIST_LOG_ROUNDS.
+ *
+ * The device numbers the rounds: launch j starts at the round in
+ * counts[CS_LIST_ROUND + j % 2] and leaves the round after its last in the other word,
+ * so a batch of launches needs no host round trip however many rounds each runs. A
+ * launch with tail == 0 runs one round over all its groups. A tail launch is one group
+ * that runs round after round, with a barrier between them, while a round has items and
+ * at most `tail` of them: where a round is short, its launch and the chain of reads
+ * before its first visit cost more than its work.
  *
  * On a device that ends loops early (CS_LOOP_TRIPS, runtime/loop_trips.h) the host
- * launches each round over exactly its items, so a work-item makes only one item's
- * trips; a round kernel ends with cs_worklist_check_loops, which raises counts[8] if its
- * loops were cut short all the same (counts[9] holds 1) and the host stops. */
+ * launches each round over exactly its items and no tail, so a work-item makes only
+ * one item's trips; a round kernel ends with cs_worklist_check_loops, which raises
+ * counts[8] if its loops were cut short all the same (counts[9] holds 1) and the host
+ * stops. Host twin of the layout: list_words and its neighbours in
+ * runtime/src/scheduler.cpp. */
 #include "loop_trips.h"
 
-inline uint cs_worklist_items(__global uint* counts, const uint round, const uint capacity)
+#define CS_LIST_ROUND 10u
+#define CS_LIST_TAIL_ROUNDS 12u
+#define CS_LIST_LOG 13u
+#define CS_LIST_LOG_ROUNDS 64u
+/* Rounds one tail launch runs at most, so that no launch runs unbounded. */
+#define CS_LIST_TAIL_MOST 1024u
+
+inline uint cs_worklist_first_round(__global const uint* counts, const uint launch)
+{
+  return counts[CS_LIST_ROUND + launch % 2u];
+}
+
+/* The items of `round` for this launch to run, at most the capacity; 0 where the launch
+ * runs no more rounds, after its first work-item has told the next launch where to
+ * start. */
+inline uint cs_worklist_round_items(__global uint* counts, const uint launch, const uint first, const uint round,
+                                    const uint capacity, const uint tail)
 {
   const uint n = counts[round % 3];
+  const int runs = n > 0 && (tail ? get_group_id(0) == 0 && n <= tail && round - first < CS_LIST_TAIL_MOST
+                                  : round == first);
   if (get_global_id(0) == 0) {
-    counts[(round + 2) % 3] = 0;
-    const uint low = counts[4] + n;
-    if (low < n) ++counts[5];
-    counts[4] = low;
-    counts[6] = max(counts[6], n);
-    if (n) counts[7] = round + 1;
+    if (!runs) {
+      counts[CS_LIST_ROUND + (launch + 1u) % 2u] = round;
+    } else {
+      counts[(round + 2) % 3] = 0;
+      const uint low = counts[4] + n;
+      if (low < n) ++counts[5];
+      counts[4] = low;
+      counts[6] = max(counts[6], n);
+      counts[7] = round + 1;
+      if (tail) ++counts[CS_LIST_TAIL_ROUNDS];
+      if (round < CS_LIST_LOG_ROUNDS) counts[CS_LIST_LOG + round] = n;
+    }
   }
-  return min(n, capacity);
+  return runs ? min(n, capacity) : 0u;
 }
+
+/* Between the rounds of a tail launch, its appends, counts and whatever state the round
+ * wrote are seen by the whole group. */
+inline void cs_worklist_round_end(void) { barrier(CLK_GLOBAL_MEM_FENCE | CLK_LOCAL_MEM_FENCE); }
 
 /* One atomic a group on the global count: the group adds up its items first. */
 inline uint cs_worklist_append(__local uint* group, __global uint* counts, const uint round, const uint k)
@@ -70,10 +116,10 @@ inline uint cs_worklist_seed_index(__global uint* counts, const uint capacity)
   return cs_worklist_fits(counts, capacity, at) ? at : capacity;
 }
 
-inline void cs_worklist_check_loops(__global uint* counts, const uint round)
+inline void cs_worklist_check_loops(__global uint* counts, const uint first)
 {
 #if CS_LOOP_TRIPS
-  if (cs_loops_were_cut(2u + (round == 0xffffffffu), counts + 9)) counts[8] = 1u;
+  if (cs_loops_were_cut(2u + (first == 0xffffffffu), counts + 9)) counts[8] = 1u;
 #endif
 }
 
