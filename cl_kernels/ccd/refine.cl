@@ -165,9 +165,10 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
                               const uint tail)
 {
   __local uint group[2];
-  const uint first = cs_worklist_first_round(counts, launch);
+  uint first_items;
+  const uint first = cs_worklist_first_round(counts, launch, &first_items);
   for (uint round = first;; ++round) {
-    const uint items = cs_worklist_round_items(counts, launch, first, round, capacity, tail);
+    const uint items = cs_worklist_round_items(counts, launch, first, first_items, round, capacity, tail);
     if (items == 0) break;
     __global const cs_item* in = round % 2 ? list1 : list0;
     __global cs_item* out = round % 2 ? list0 : list1;

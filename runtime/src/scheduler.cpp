@@ -61,11 +61,13 @@ constexpr std::uint64_t spill_per_group = 16;
 // in cl_kernels/runtime/compact.cl).
 constexpr std::size_t most_merged_per_group = 64;
 
-// A work list's counts (cl_kernels/runtime/worklist.h): loops_canary, the 1 that a
-// kernel's loop reads each trip; list_round and the word after it, the round each launch
-// starts at by parity; tail_rounds_word, the rounds run in one group; from list_log on,
-// the items of each of the first log_rounds rounds.
-constexpr std::size_t loops_canary = 9, list_round = 10, tail_rounds_word = 12, list_log = 13, log_rounds = 64;
+// A work list's counts (cl_kernels/runtime/worklist.h, CS_LIST_*): the items of the
+// rounds by round % 3, the round each launch starts at by parity, the capacity the
+// rounds needed, the items of all rounds (two words), the largest round, the rounds
+// that had items, whether a kernel's loops were cut, the canary (1), the rounds run in
+// a tail, and from list_log on the items of each of the first log_rounds rounds.
+constexpr std::size_t list_round = 3, list_needed = 5, list_items = 6, list_widest = 8, list_rounds = 9,
+                      list_cut = 10, list_canary = 11, list_tail_rounds = 12, list_log = 13, log_rounds = 64;
 constexpr std::size_t list_words = list_log + log_rounds;
 
 struct ListState {
@@ -540,7 +542,7 @@ struct Scheduler::State {
     for (;;) {
       context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
       context.fill_u32(l.counts, 0, 1, list_words - 1, tl());
-      context.fill_u32(l.counts, 1, loops_canary, 1, tl());
+      context.fill_u32(l.counts, 1, list_canary, 1, tl());
       unsigned a = bind_own_args(*p.spec, l.seed);
       l.seed.set_arg(a++, l.state);
       l.seed.set_arg(a++, l.lists[0]);
@@ -558,30 +560,31 @@ struct Scheduler::State {
       for (;;) {
         for (const bool in_tail : batch) {
           const bool as_tail = in_tail && tail;
-          unsigned r = bind_own_args(*p.spec, l.round);
-          l.round.set_arg(r++, l.state);
-          l.round.set_arg(r++, l.lists[0]);
-          l.round.set_arg(r++, l.lists[1]);
-          l.round.set_arg(r++, l.counts);
-          l.round.set_arg(r++, cl_uint(launch));
-          l.round.set_arg(r++, cl_uint(l.capacity));
-          l.round.set_arg(r++, cl_uint(as_tail ? tail : 0));
+          const Kernel& k = l.round;
+          unsigned r = bind_own_args(*p.spec, k);
+          k.set_arg(r++, l.state);
+          k.set_arg(r++, l.lists[0]);
+          k.set_arg(r++, l.lists[1]);
+          k.set_arg(r++, l.counts);
+          k.set_arg(r++, cl_uint(launch));
+          k.set_arg(r++, cl_uint(l.capacity));
+          k.set_arg(r++, cl_uint(as_tail ? tail : 0));
           const std::uint32_t round = counts[list_round + launch % 2];
           const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
           if (as_tail)
-            context.launch(l.round, tail_group, tail_group, tl(), label);
+            context.launch(k, tail_group, tail_group, tl(), label);
           else
-            context.launch(l.round, round_up(items, round_group), round_group, tl(), label);
+            context.launch(k, round_up(items, round_group), round_group, tl(), label);
           ++launch;
           ++p.stats.launches;
         }
         context.read(l.counts, counts, sizeof counts, 0, tl());
         ++stats.readbacks;
-        if (counts[8])
+        if (counts[list_cut])
           throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
                       std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
         const std::uint32_t round = counts[list_round + launch % 2];
-        if (counts[3] > l.capacity || counts[round % 3] == 0) break;
+        if (counts[list_needed] > l.capacity || counts[round % 3] == 0) break;
         if (round >= most_rounds)
           throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[round % 3]) +
                       " items after " + std::to_string(round) + " rounds");
@@ -591,16 +594,16 @@ struct Scheduler::State {
           next_batch *= 2;
         }
       }
-      if (counts[3] <= l.capacity) {
+      if (counts[list_needed] <= l.capacity) {
         l.plan = plan_rounds(counts, tail);
-        p.stats.rounds = counts[7];
-        p.stats.tail_rounds = counts[tail_rounds_word];
-        p.stats.list_items = std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
-        p.stats.widest_list = counts[6];
+        p.stats.rounds = counts[list_rounds];
+        p.stats.tail_rounds = counts[list_tail_rounds];
+        p.stats.list_items = std::uint64_t(counts[list_items]) | std::uint64_t(counts[list_items + 1]) << 32;
+        p.stats.widest_list = counts[list_widest];
         return;
       }
       // Rounds after the one that overflowed saw a cut list and asked for too little.
-      allocate_lists(l, std::max(grown(counts[3]), 2 * l.capacity), w.item_bytes);
+      allocate_lists(l, std::max(grown(counts[list_needed]), 2 * l.capacity), w.item_bytes);
       ++p.stats.reruns;
     }
   }
@@ -610,7 +613,7 @@ struct Scheduler::State {
   static std::vector<bool> plan_rounds(const std::uint32_t* counts, std::uint32_t tail)
   {
     std::vector<bool> plan;
-    for (std::uint32_t round = 0; round < counts[7]; ++round) {
+    for (std::uint32_t round = 0; round < counts[list_rounds]; ++round) {
       const bool short_round = round < log_rounds && counts[list_log + round] <= tail;
       if (!(short_round && !plan.empty() && plan.back())) plan.push_back(short_round);
     }

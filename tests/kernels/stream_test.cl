@@ -120,9 +120,10 @@ __kernel void test_tree_round(__global const uint* values, const uint n, __globa
                               const uint tail)
 {
   __local uint group[2];
-  const uint first = cs_worklist_first_round(counts, launch);
+  uint first_items;
+  const uint first = cs_worklist_first_round(counts, launch, &first_items);
   for (uint round = first;; ++round) {
-    const uint items = cs_worklist_round_items(counts, launch, first, round, capacity, tail);
+    const uint items = cs_worklist_round_items(counts, launch, first, first_items, round, capacity, tail);
     if (items == 0) break;
     __global const uint2* in = round % 2 ? list1 : list0;
     __global uint2* out = round % 2 ? list0 : list1;

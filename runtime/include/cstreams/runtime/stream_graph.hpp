@@ -60,9 +60,9 @@ template <class T> PassArg value_of(const T& v)
 //          add more first items at cs_worklist_seed_index (runtime/worklist.h);
 //   round  `round_items` work-items, each group striding over the round's items, or
 //          one group running short rounds one after another (a tail launch; see
-//          cl_kernels/runtime/worklist.h): __global S* state, __global I* list0,
-//          __global I* list1, __global uint* counts, const uint launch,
-//          const uint capacity, const uint tail;
+//          cl_kernels/runtime/worklist.h):
+//          __global S* state, __global I* list0, __global I* list1,
+//          __global uint* counts, const uint launch, const uint capacity, const uint tail;
 //   then the pass's kernel over the inputs: __global S* state, then its emitters.
 // Rounds go in batches with no host round trip between them; the host reads the
 // counts once a batch. A round that overflows the list grows it and the work starts
