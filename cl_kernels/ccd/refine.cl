@@ -160,59 +160,50 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   state[i] = s;
 }
 
-__kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state, __global cs_item* list0,
-                              __global cs_item* list1, __global uint* counts, const uint launch, const uint capacity,
-                              const uint tail)
+__kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state, __global const cs_item* in,
+                              __global cs_item* out, __global uint* counts, const uint round, const uint capacity)
 {
   __local uint group[2];
-  uint first_items;
-  const uint first = cs_worklist_first_round(counts, launch, &first_items);
-  for (uint round = first;; ++round) {
-    const uint items = cs_worklist_round_items(counts, launch, first, first_items, round, capacity, tail);
-    if (items == 0) break;
-    __global const cs_item* in = round % 2 ? list1 : list0;
-    __global cs_item* out = round % 2 ? list0 : list1;
-    const uint now = round % 2;
-    for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
-      const uint i = base + get_local_id(0);
-      int visit = CS_BOX_DROP;
-      cs_item lo, hi;
-      if (i < items) {
-        const cs_item it = in[i];
-        __global cs_refine_state* s = state + it.query;
-        const cs_refine_state seen = *s;
-        const real before = cs_time_of(seen.best[1 - now]);
-        const uint last_splits = seen.work[(round + 2) % 3]; /* this round's boxes, halved */
-        const uint work = it.work + last_splits;
-        const int vertex_face = (seen.flags & CS_FLAG_VERTEX_FACE) != 0;
-        real points[24];
-        cs_vertex_points(seen.vertices, x0, x1, points);
-        const cs_query q = cs_points_query(points, exact_input);
-        const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
-        const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
-        int slack = 0, limited = 0;
-        real t = before;
-        visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
-                             out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
-        cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
-        /* After the visit: issued before it, this store to a word that every box of the
-         * query writes made cloth-ball's refinement a third slower in single precision. */
-        s->work[(round + 1) % 3] = 0;
-        if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
-        if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
-          atomic_inc(&s->work[round % 3]);
-          lo.query = hi.query = it.query;
-          lo.work = hi.work = work;
-        }
+  const uint items = cs_worklist_items(counts, round, capacity);
+  const uint now = round % 2;
+  for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
+    const uint i = base + get_local_id(0);
+    int visit = CS_BOX_DROP;
+    cs_item lo, hi;
+    if (i < items) {
+      const cs_item it = in[i];
+      __global cs_refine_state* s = state + it.query;
+      const cs_refine_state seen = *s;
+      const real before = cs_time_of(seen.best[1 - now]);
+      const uint last_splits = seen.work[(round + 2) % 3]; /* this round's boxes, halved */
+      const uint work = it.work + last_splits;
+      const int vertex_face = (seen.flags & CS_FLAG_VERTEX_FACE) != 0;
+      real points[24];
+      cs_vertex_points(seen.vertices, x0, x1, points);
+      const cs_query q = cs_points_query(points, exact_input);
+      const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
+      const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
+      int slack = 0, limited = 0;
+      real t = before;
+      visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
+                           out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
+      cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
+      /* After the visit: issued before it, this store to a word that every box of the
+       * query writes made cloth-ball's refinement a third slower in single precision. */
+      s->work[(round + 1) % 3] = 0;
+      if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
+      if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
+        atomic_inc(&s->work[round % 3]);
+        lo.query = hi.query = it.query;
+        lo.work = hi.work = work;
       }
-      const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : 0u;
-      const uint at = cs_worklist_append(group, counts, round, boxes);
-      if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
-      if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
     }
-    cs_worklist_round_end();
+    const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : 0u;
+    const uint at = cs_worklist_append(group, counts, round, boxes);
+    if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
+    if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
   }
-  cs_worklist_check_loops(counts, first);
+  cs_worklist_check_loops(counts, round);
 }
 
 /* Each query's answer, once no box of it is left, into the contacts of its kind. */

@@ -61,14 +61,8 @@ constexpr std::uint64_t spill_per_group = 16;
 // in cl_kernels/runtime/compact.cl).
 constexpr std::size_t most_merged_per_group = 64;
 
-// A work list's counts (cl_kernels/runtime/worklist.h, CS_LIST_*): the items of the
-// rounds by round % 3, the round each launch starts at by parity, the capacity the
-// rounds needed, the items of all rounds (two words), the largest round, the rounds
-// that had items, whether a kernel's loops were cut, the canary (1), the rounds run in
-// a tail, and from list_log on the items of each of the first log_rounds rounds.
-constexpr std::size_t list_round = 3, list_needed = 5, list_items = 6, list_widest = 8, list_rounds = 9,
-                      list_cut = 10, list_canary = 11, list_tail_rounds = 12, list_log = 13, log_rounds = 64;
-constexpr std::size_t list_words = list_log + log_rounds;
+// A work list's device side (Worklist in stream_graph.hpp).
+constexpr std::size_t list_words = 10;
 
 struct ListState {
   Kernel seed, round;
@@ -77,9 +71,7 @@ struct ListState {
   Buffer counts;    // cl_kernels/runtime/worklist.h: counts[list_words]
   std::size_t capacity = 0;
   std::size_t released = 0;  // the capacity the lists had when memory pressure took them
-  // The next run's first batch, from the last run's rounds: a launch per round, or
-  // (true) one tail launch for a run of short rounds.
-  std::vector<bool> plan;
+  unsigned rounds = 0;   // that the last run needed: the next run's first batch
   bool settled = false;  // this run's rounds are done; a rerun of the pass only emits
 };
 
@@ -532,17 +524,13 @@ struct Scheduler::State {
     // A search deeper than this is a kernel that never settles, not work.
     constexpr unsigned most_rounds = 1u << 20;
     // On a device that ends loops early, each round goes over exactly its items, one a
-    // work-item, so that no work-item strides over many, and no round runs in a tail;
-    // the host reads the counts after every round (such devices are CPUs, where a read
-    // costs little).
+    // work-item, so that no work-item strides over many; the host reads the counts
+    // after every round (such devices are CPUs, where a read costs little).
     const bool bounded_loops = context.loop_trip_limit() != 0;
-    const std::size_t tail_group = std::min(wg, l.round.max_work_group_size());
-    const std::uint32_t tail = bounded_loops ? 0 : std::uint32_t(tail_group * w.tail_passes);
-    std::uint32_t counts[list_words] = {};
     for (;;) {
       context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
-      context.fill_u32(l.counts, 0, 1, list_words - 1, tl());
-      context.fill_u32(l.counts, 1, list_canary, 1, tl());
+      context.fill_u32(l.counts, 0, 1, list_words - 2, tl());
+      context.fill_u32(l.counts, 1, list_words - 1, 1, tl());
       unsigned a = bind_own_args(*p.spec, l.seed);
       l.seed.set_arg(a++, l.state);
       l.seed.set_arg(a++, l.lists[0]);
@@ -550,74 +538,51 @@ struct Scheduler::State {
       l.seed.set_arg(a++, cl_uint(l.capacity));
       context.launch(l.seed, round_up(n, round_group), round_group, tl(), label);
       ++p.stats.launches;
+      std::uint32_t counts[list_words] = {std::uint32_t(n)};
       // Rounds launched over exactly their items must know the seed's.
       if (bounded_loops) {
         context.read(l.counts, counts, sizeof counts, 0, tl());
         ++stats.readbacks;
       }
-      std::vector<bool> batch = l.plan.empty() || bounded_loops ? std::vector<bool>{false} : l.plan;
-      unsigned launch = 0, next_batch = 8;
+      unsigned round = 0, batch = bounded_loops ? 1 : std::max(l.rounds, 1u), next_batch = 8;
       for (;;) {
-        for (const bool in_tail : batch) {
-          const bool as_tail = in_tail && tail;
-          const Kernel& k = l.round;
-          unsigned r = bind_own_args(*p.spec, k);
-          k.set_arg(r++, l.state);
-          k.set_arg(r++, l.lists[0]);
-          k.set_arg(r++, l.lists[1]);
-          k.set_arg(r++, l.counts);
-          k.set_arg(r++, cl_uint(launch));
-          k.set_arg(r++, cl_uint(l.capacity));
-          k.set_arg(r++, cl_uint(as_tail ? tail : 0));
-          const std::uint32_t round = counts[list_round + launch % 2];
+        for (const unsigned last = round + batch; round < last; ++round) {
+          unsigned r = bind_own_args(*p.spec, l.round);
+          l.round.set_arg(r++, l.state);
+          l.round.set_arg(r++, l.lists[round % 2]);
+          l.round.set_arg(r++, l.lists[(round + 1) % 2]);
+          l.round.set_arg(r++, l.counts);
+          l.round.set_arg(r++, cl_uint(round));
+          l.round.set_arg(r++, cl_uint(l.capacity));
           const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
-          if (as_tail)
-            context.launch(k, tail_group, tail_group, tl(), label);
-          else
-            context.launch(k, round_up(items, round_group), round_group, tl(), label);
-          ++launch;
+          context.launch(l.round, round_up(items, round_group), round_group, tl(), label);
           ++p.stats.launches;
         }
         context.read(l.counts, counts, sizeof counts, 0, tl());
         ++stats.readbacks;
-        if (counts[list_cut])
+        if (counts[8])
           throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
                       std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
-        const std::uint32_t round = counts[list_round + launch % 2];
-        if (counts[list_needed] > l.capacity || counts[round % 3] == 0) break;
+        if (counts[3] > l.capacity || counts[round % 3] == 0) break;
         if (round >= most_rounds)
           throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[round % 3]) +
                       " items after " + std::to_string(round) + " rounds");
         if (!bounded_loops) {
-          batch.assign(next_batch, false);
-          if (tail) batch.push_back(true);
+          batch = next_batch;
           next_batch *= 2;
         }
       }
-      if (counts[list_needed] <= l.capacity) {
-        l.plan = plan_rounds(counts, tail);
-        p.stats.rounds = counts[list_rounds];
-        p.stats.tail_rounds = counts[list_tail_rounds];
-        p.stats.list_items = std::uint64_t(counts[list_items]) | std::uint64_t(counts[list_items + 1]) << 32;
-        p.stats.widest_list = counts[list_widest];
+      if (counts[3] <= l.capacity) {
+        l.rounds = counts[7];
+        p.stats.rounds = counts[7];
+        p.stats.list_items = std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
+        p.stats.widest_list = counts[6];
         return;
       }
       // Rounds after the one that overflowed saw a cut list and asked for too little.
-      allocate_lists(l, std::max(grown(counts[list_needed]), 2 * l.capacity), w.item_bytes);
+      allocate_lists(l, std::max(grown(counts[3]), 2 * l.capacity), w.item_bytes);
       ++p.stats.reruns;
     }
-  }
-
-  // A launch for each round of a run, but one tail launch for each run of rounds with at
-  // most `tail` items: the rounds the run had, as the next one likely has.
-  static std::vector<bool> plan_rounds(const std::uint32_t* counts, std::uint32_t tail)
-  {
-    std::vector<bool> plan;
-    for (std::uint32_t round = 0; round < counts[list_rounds]; ++round) {
-      const bool short_round = round < log_rounds && counts[list_log + round] <= tail;
-      if (!(short_round && !plan.empty() && plan.back())) plan.push_back(short_round);
-    }
-    return plan;
   }
 
   void execute(PassState& p, Redo redo)

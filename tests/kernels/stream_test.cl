@@ -115,34 +115,26 @@ __kernel void test_tree_seed(__global const uint* values, const uint n, __global
   }
 }
 
-__kernel void test_tree_round(__global const uint* values, const uint n, __global uint* leaves, __global uint2* list0,
-                              __global uint2* list1, __global uint* counts, const uint launch, const uint capacity,
-                              const uint tail)
+__kernel void test_tree_round(__global const uint* values, const uint n, __global uint* leaves,
+                              __global const uint2* in, __global uint2* out, __global uint* counts, const uint round,
+                              const uint capacity)
 {
   __local uint group[2];
-  uint first_items;
-  const uint first = cs_worklist_first_round(counts, launch, &first_items);
-  for (uint round = first;; ++round) {
-    const uint items = cs_worklist_round_items(counts, launch, first, first_items, round, capacity, tail);
-    if (items == 0) break;
-    __global const uint2* in = round % 2 ? list1 : list0;
-    __global uint2* out = round % 2 ? list0 : list1;
-    for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
-      const uint i = base + get_local_id(0);
-      uint2 item = (uint2)(0, 0);
-      uint k = 0;
-      if (i < items) {
-        item = in[i];
-        if (item.y < test_depth(values[item.x])) k = 2;
-        else atomic_inc(&leaves[item.x]);
-      }
-      const uint at = cs_worklist_append(group, counts, round, k);
-      for (uint j = 0; j < k; ++j)
-        if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = (uint2)(item.x, item.y + 1);
+  const uint items = cs_worklist_items(counts, round, capacity);
+  for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
+    const uint i = base + get_local_id(0);
+    uint2 item = (uint2)(0, 0);
+    uint k = 0;
+    if (i < items) {
+      item = in[i];
+      if (item.y < test_depth(values[item.x])) k = 2;
+      else atomic_inc(&leaves[item.x]);
     }
-    cs_worklist_round_end();
+    const uint at = cs_worklist_append(group, counts, round, k);
+    for (uint j = 0; j < k; ++j)
+      if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = (uint2)(item.x, item.y + 1);
   }
-  cs_worklist_check_loops(counts, first);
+  cs_worklist_check_loops(counts, round);
 }
 
 __kernel void test_tree_finish(__global const uint* values, const uint n, __global const uint* leaves,

@@ -26,11 +26,7 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
                                    {"reruns", p.reruns},
                                    {"scratch_bytes", p.scratch_bytes},
                                    {"segment_bytes", p.segment_bytes}};
-    if (p.rounds)
-      pass.update({{"rounds", p.rounds},
-                   {"tail_rounds", p.tail_rounds},
-                   {"list_items", p.list_items},
-                   {"widest_list", p.widest_list}});
+    if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
   }
   for (const auto& st : s.run.streams)
     streams[st.name] = {{"count", st.count},

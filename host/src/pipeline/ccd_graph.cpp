@@ -306,17 +306,11 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
   // 256 (BENCHMARKS.md).
   constexpr std::size_t refine_group = 64;
-  // Rounds of up to one group's worth of boxes run in a single group (Worklist::
-  // tail_passes). On the H200 a box's visit in double precision takes ~8 us of a
-  // ~17 us round, so the tail saves the rest; up to two or four groups' worth, the
-  // rounds that would run in one group's passes cost more than their launches saved
-  // (BENCHMARKS.md). pocl's rounds take as long either way.
-  constexpr std::size_t refine_tail_passes = 1;
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
   auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", options})
                    .launch_over(open)
                    .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 32, refine_items,
-                            refine_group, refine_tail_passes})
+                            refine_group})
                    .emit(vf)
                    .emit(ee)
                    .expect_items(0.5);

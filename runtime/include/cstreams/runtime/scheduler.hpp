@@ -26,7 +26,6 @@ struct PassStats {
   // A work list's last execution: rounds that had items (launches beyond them found
   // the list empty), items over all rounds, and the most in one round.
   unsigned rounds = 0;
-  unsigned tail_rounds = 0;     // of them, run in a single group (Worklist::tail_passes)
   std::uint64_t list_items = 0;
   std::size_t widest_list = 0;
   // The pass's own: registration segments (those it held this run, shared with passes

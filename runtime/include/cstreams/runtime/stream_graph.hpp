@@ -58,11 +58,10 @@ template <class T> PassArg value_of(const T& v)
 //          const uint capacity
 //          one first item per input (list[i]) and the input's state (state[i]); it may
 //          add more first items at cs_worklist_seed_index (runtime/worklist.h);
-//   round  `round_items` work-items, each group striding over the round's items, or
-//          one group running short rounds one after another (a tail launch; see
-//          cl_kernels/runtime/worklist.h):
-//          __global S* state, __global I* list0, __global I* list1,
-//          __global uint* counts, const uint launch, const uint capacity, const uint tail;
+//   round  `round_items` work-items, each group striding over the round's items
+//          (cl_kernels/runtime/worklist.h): __global S* state, __global const I* in,
+//          __global I* out, __global uint* counts, const uint round, const uint capacity,
+//          ending with cs_worklist_check_loops(counts, round);
 //   then the pass's kernel over the inputs: __global S* state, then its emitters.
 // Rounds go in batches with no host round trip between them; the host reads the
 // counts once a batch. A round that overflows the list grows it and the work starts
@@ -76,11 +75,6 @@ struct Worklist {
   // the context's). Groups share nothing but an append, so kernels heavy in registers
   // can run in small groups, as many at once as the device's registers hold.
   std::size_t round_group = 0;
-  // Rounds of at most this many items per work-item of one group of the context's size
-  // run in a single group, one after another between barriers, without a launch each
-  // (0: never). A round of few items costs a launch and a chain of dependent reads more
-  // than its visits; a CPU launches cheaply and runs one group on one core.
-  std::size_t tail_passes = 0;
 };
 
 // One kernel over the items of a stream, and what it reads and writes.
