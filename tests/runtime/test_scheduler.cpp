@@ -293,6 +293,45 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   check_words();
 }
 
+TEST_CASE("a pass that outgrows the idle segments gives them back before it takes larger ones",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  const std::size_t n = 200000;
+  const auto values = g.fixed("values", 4, n), none = g.fixed("none", 4, 0);
+  const auto pairs = g.variable("pairs", 8, 16), words = g.variable("words", 4, 16);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  g.pass("copy", {program, "test_concatenate"})
+      .launch_over({pairs, none})
+      .emit(words)
+      .arg(buffer_of(pairs))
+      .arg(count_of(pairs))
+      .arg(buffer_of(none))
+      .arg(count_of(none));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  s.upload(values, random_values(n, 43));
+  for (int frame = 0; frame < 3; ++frame) s.run();
+  const std::size_t pool = s.stats().segment_bytes;
+  // Every value emits 40 pairs: both stages need several times the pool's segments.
+  std::uint32_t burst = 0;
+  while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+  s.upload(values, std::vector<std::uint32_t>(n, burst));
+  ctx.reset_memory_high_water();
+  s.run();
+  const std::size_t held = ctx.memory_in_use();
+  REQUIRE(s.stats().segment_bytes > 4 * pool);
+  // At its peak the device held what it holds now, the burst's segments among them, but
+  // not the pool the burst outgrew, which used to stay idle while the larger segments
+  // were taken.
+  INFO("pool " << pool << ", held " << held);
+  CHECK(ctx.memory_high_water() < held + pool / 2);
+  const auto p = s.download<Pair>(pairs);
+  std::vector<std::uint32_t> expected(p.size());
+  std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
+  CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
+}
+
 TEST_CASE("under any memory limit a stage either fits, giving back scratch, or fails naming the allocation",
           "[runtime][scheduler][quick]")
 {
