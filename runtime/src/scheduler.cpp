@@ -211,9 +211,9 @@ struct Scheduler::State {
   // new one. What a buffer holds beyond the need, the rest of the stage cannot have:
   // unless that is little, it is taken only where the device has room for it twice over.
   // Before a new one is taken, the idle buffers too small for it go back: held through
-  // the allocation, they made its peak (the second step of cloth-ball, whose front update
-  // outgrew the buffers the first step's stages kept, held 335 MiB where later steps
-  // held 260), and the stages after this one can share the new buffer.
+  // the allocation, they set the run's peak (cloth-ball's second step, whose front update
+  // outgrew the buffers the first step's stages kept, held 336 MiB where later steps
+  // hold 260), and the stages after this one can share the new buffer.
   void take_segments(EmitterState& e, std::size_t bytes)
   {
     const auto fits = smallest_holding(idle_segments, bytes, [](const Buffer& b) { return b.bytes(); });

@@ -234,36 +234,48 @@ TEST_CASE("segmented-lock segments follow the last run, and what they cannot hol
   CHECK(run(v) == 0);
 }
 
-TEST_CASE("a later stage's pass registers into the segments an earlier stage's pass held", "[runtime][scheduler][quick]")
-{
-  auto& ctx = cstreams::test::device();
+// Values expand into pairs; in the next stage a pass copies the pairs' first words, one
+// per pair: half the bytes.
+struct ExpandThenCopy {
   StreamGraph g;
-  const std::size_t n = 20000;
-  const auto values = g.fixed("values", 4, n), none = g.fixed("none", 4, 0);
-  const auto pairs = g.variable("pairs", 8, 16), words = g.variable("words", 4, 16);
-  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
-  // The pairs' first words, one per pair: half the bytes, in the next stage.
-  g.pass("copy", {program, "test_concatenate"})
-      .launch_over({pairs, none})
-      .emit(words)
-      .arg(buffer_of(pairs))
-      .arg(count_of(pairs))
-      .arg(buffer_of(none))
-      .arg(count_of(none));
-  // Segmented lock, the default: segments follow what each group emitted, so a burst of
-  // every value asks for several times the usual segments. (Lock-free ones hold the
-  // busiest work-item's items for every work-item, a burst's size already.)
-  Scheduler s(ctx, g, {Registration::segmented_lock, true});
-  const auto check_words = [&] {
+  StreamId values, pairs, words;
+  explicit ExpandThenCopy(std::size_t n)
+  {
+    values = g.fixed("values", 4, n);
+    const auto none = g.fixed("none", 4, 0);
+    pairs = g.variable("pairs", 8, 16);
+    words = g.variable("words", 4, 16);
+    g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+    g.pass("copy", {program, "test_concatenate"})
+        .launch_over({pairs, none})
+        .emit(words)
+        .arg(buffer_of(pairs))
+        .arg(count_of(pairs))
+        .arg(buffer_of(none))
+        .arg(count_of(none));
+  }
+  void check_words(const Scheduler& s) const
+  {
     const auto p = s.download<Pair>(pairs);
     std::vector<std::uint32_t> expected(p.size());
     std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
     CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
-  };
-  s.upload(values, random_values(n, 41));
+  }
+};
+
+TEST_CASE("a later stage's pass registers into the segments an earlier stage's pass held", "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 20000;
+  const ExpandThenCopy e(n);
+  // Segmented lock, the default: segments follow what each group emitted, so a burst of
+  // every value asks for several times the usual segments. (Lock-free ones hold the
+  // busiest work-item's items for every work-item, a burst's size already.)
+  Scheduler s(ctx, e.g, {Registration::segmented_lock, true});
+  s.upload(e.values, random_values(n, 41));
   for (int frame = 0; frame < 3; ++frame) {
     s.run();
-    check_words();
+    e.check_words(s);
   }
   const auto& stats = s.stats();
   const std::size_t expand = stats.passes.at(0).segment_bytes, copy = stats.passes.at(1).segment_bytes;
@@ -275,10 +287,10 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   // they go back.
   std::uint32_t burst = 0;
   while (cstreams::test::test_emit_count(burst) != 40) ++burst;
-  s.upload(values, std::vector<std::uint32_t>(n, burst));
+  s.upload(e.values, std::vector<std::uint32_t>(n, burst));
   s.run();
   CHECK(s.stats().segment_bytes > 4 * expand);
-  s.upload(values, random_values(n, 41));
+  s.upload(e.values, random_values(n, 41));
   s.run();
   s.run();
   CHECK(s.stats().segment_bytes <= 2 * expand + (1u << 20));
@@ -290,33 +302,23 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
   CHECK(ctx.memory_in_use() + segments <= held);
   CHECK_FALSE(s.release_idle_scratch());
   s.run();
-  check_words();
+  e.check_words(s);
 }
 
 TEST_CASE("a pass that outgrows the idle segments gives them back before it takes larger ones",
           "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
-  StreamGraph g;
   const std::size_t n = 200000;
-  const auto values = g.fixed("values", 4, n), none = g.fixed("none", 4, 0);
-  const auto pairs = g.variable("pairs", 8, 16), words = g.variable("words", 4, 16);
-  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
-  g.pass("copy", {program, "test_concatenate"})
-      .launch_over({pairs, none})
-      .emit(words)
-      .arg(buffer_of(pairs))
-      .arg(count_of(pairs))
-      .arg(buffer_of(none))
-      .arg(count_of(none));
-  Scheduler s(ctx, g, {Registration::segmented_lock, true});
-  s.upload(values, random_values(n, 43));
+  const ExpandThenCopy e(n);
+  Scheduler s(ctx, e.g, {Registration::segmented_lock, true});
+  s.upload(e.values, random_values(n, 43));
   for (int frame = 0; frame < 3; ++frame) s.run();
   const std::size_t pool = s.stats().segment_bytes;
   // Every value emits 40 pairs: both stages need several times the pool's segments.
   std::uint32_t burst = 0;
   while (cstreams::test::test_emit_count(burst) != 40) ++burst;
-  s.upload(values, std::vector<std::uint32_t>(n, burst));
+  s.upload(e.values, std::vector<std::uint32_t>(n, burst));
   ctx.reset_memory_high_water();
   s.run();
   const std::size_t held = ctx.memory_in_use();
@@ -326,10 +328,7 @@ TEST_CASE("a pass that outgrows the idle segments gives them back before it take
   // were taken.
   INFO("pool " << pool << ", held " << held);
   CHECK(ctx.memory_high_water() < held + pool / 2);
-  const auto p = s.download<Pair>(pairs);
-  std::vector<std::uint32_t> expected(p.size());
-  std::memcpy(expected.data(), p.data(), expected.size() * sizeof(std::uint32_t));
-  CHECK(sorted(s.download<std::uint32_t>(words)) == sorted(expected));
+  e.check_words(s);
 }
 
 TEST_CASE("under any memory limit a stage either fits, giving back scratch, or fails naming the allocation",
