@@ -22,6 +22,14 @@ inline std::uint32_t test_emit_count(std::uint32_t value)
   return (h & 63u) == 0 ? 40u : h % 5u;
 }
 
+// The smallest value whose test_expand emits `count` items (0 to 4, or 40: a burst).
+inline std::uint32_t value_emitting(std::uint32_t count)
+{
+  std::uint32_t value = 0;
+  while (test_emit_count(value) != count) ++value;
+  return value;
+}
+
 using Pair = std::array<std::uint32_t, 2>;
 using Quad = std::array<std::uint32_t, 4>;
 

@@ -218,8 +218,7 @@ TEST_CASE("segmented-lock segments follow the last run, and what they cannot hol
     CHECK(std::is_sorted(got.begin(), got.end(), [&](const Pair& a, const Pair& b) { return a[0] / wg < b[0] / wg; }));
     return s.stats().passes.at(0).reruns;
   };
-  std::uint32_t burst = 0;  // a value that emits 40 items
-  while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+  const std::uint32_t burst = cstreams::test::value_emitting(40);
 
   auto v = random_values(n, 5);
   run(v);
@@ -285,8 +284,7 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
 
   // A burst (every value emits 40 pairs) takes larger segments; once it has passed,
   // they go back.
-  std::uint32_t burst = 0;
-  while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+  const std::uint32_t burst = cstreams::test::value_emitting(40);
   s.upload(e.values, std::vector<std::uint32_t>(n, burst));
   s.run();
   CHECK(s.stats().segment_bytes > 4 * expand);
@@ -316,8 +314,7 @@ TEST_CASE("a pass that outgrows the idle segments gives them back before it take
   for (int frame = 0; frame < 3; ++frame) s.run();
   const std::size_t pool = s.stats().segment_bytes;
   // Every value emits 40 pairs: both stages need several times the pool's segments.
-  std::uint32_t burst = 0;
-  while (cstreams::test::test_emit_count(burst) != 40) ++burst;
+  const std::uint32_t burst = cstreams::test::value_emitting(40);
   s.upload(e.values, std::vector<std::uint32_t>(n, burst));
   ctx.reset_memory_high_water();
   s.run();
@@ -421,8 +418,7 @@ TEST_CASE("short of memory for what a pass emits, it runs in slices of its input
   const std::size_t odd_bytes = expected.odd * 16;
   REQUIRE(odd_bytes < floor);
   // The same values but for the last nine tenths, which expand to nothing.
-  std::uint32_t silent = 0;
-  while (cstreams::test::test_emit_count(silent) != 0) ++silent;
+  const std::uint32_t silent = cstreams::test::value_emitting(0);
   std::vector<std::uint32_t> few = v;
   std::fill(few.begin() + n / 10, few.end(), silent);
   const Outputs expected_few = expect(few);
