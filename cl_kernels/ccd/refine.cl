@@ -10,7 +10,13 @@
  * launch size, the order of the list or the queries beside it. The state keeps both
  * halves of that: best[r % 2] gathers the earliest contact through round r while
  * round r reads best[(r + 1) % 2]; work[r % 3] counts round r's splits, and each item
- * carries its query's splits up to two rounds before. */
+ * carries its query's splits up to two rounds before.
+ *
+ * Where a step reports only each object's earliest time (earliest_only), a query that
+ * can no longer hold its objects' earliest one is given up whole: its answer would
+ * have been no earlier than a contact another query has found for each of its
+ * objects. The queries that go on run exactly as they would have, so every object's
+ * earliest time is the one the full list of contacts gives (cs_not_earliest). */
 #include "conservative.h"
 #include "cubic.h"
 #include "pairs.h"
@@ -20,6 +26,7 @@
 #define CS_FLAG_SLACK 1u
 #define CS_FLAG_LIMIT 2u
 #define CS_FLAG_VERTEX_FACE 4u
+#define CS_FLAG_NOT_EARLIEST 8u /* given up: it cannot hold an object's earliest time */
 /* Budgets beyond the caller's work limit, after which a query answers as out of work:
  * rounds deeper than any box a precision can still halve in all three parameters for
  * a useful query, and boxes a query holds at once, which bounds the list's memory when
@@ -86,11 +93,87 @@ typedef struct {
   uint vertices[4];
 } cs_refine_state;
 
+/* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
+inline uint cs_float_key_down(const real t)
+{
+  float f = (float)t;
+  if ((real)f > t) f = nextafter(f, 0.0f);
+  return as_uint(f);
+}
+
+inline uint cs_float_key_up(const real t)
+{
+  float f = (float)t;
+  if ((real)f < t) f = nextafter(f, 2.0f);
+  return as_uint(f);
+}
+
+#define CS_NO_TIME 0x40000000u /* 2.0f: later than any time of a step */
+
 /* queries: (a, b, vertex_face, 0) as the screen emits them (narrow_phase_pairs.cl). */
 #define CS_REFINE_PARAMS                                                                                         \
   __global const uint4 *queries, const uint n, __global const real *x0, __global const real *x1,               \
       __global const uint *faces, __global const uint *edges, const uint exact_input, const real tolerance,     \
-      const real separation, const uint max_iterations
+      const real separation, const uint max_iterations CS_EARLIEST_PARAMS
+
+/* Built with CS_EARLIEST_ACROSS (a scene of objects): whether this step reports only
+ * each object's earliest time, every vertex's object, and two words per object: the
+ * earliest contact any query has found so far, as the bits of a float rounded up (a
+ * contact's time, not yet an answer: the answer of the query that found it is no
+ * later), and the first round that found a contact at time 0 (0xffffffff: none). */
+#if CS_EARLIEST_ACROSS
+#define CS_EARLIEST_PARAMS , const uint earliest_only, __global const uint *vertex_object, __global uint *found
+#else
+#define CS_EARLIEST_PARAMS
+#endif
+
+#if CS_EARLIEST_ACROSS
+/* Built so, the state of the n queries is followed by three words a query: first[r % 3]
+ * is the earliest start of round r's boxes as a float rounded down, gathered by round
+ * r - 1 as work[] is. Apart from the rest, so that steps that need no earliest time
+ * read the state as they would without it. */
+inline __global uint* cs_first_starts(__global cs_refine_state* state, const uint n, const uint query)
+{
+  return (__global uint*)(state + n) + 3 * query;
+}
+
+inline uint2 cs_query_objects(const cs_refine_state* s, __global const uint* vertex_object)
+{
+  return (uint2)(vertex_object[s->vertices[0]], vertex_object[s->vertices[s->flags & CS_FLAG_VERTEX_FACE ? 1 : 2]]);
+}
+
+/* Whether the query's answer can no longer be an object's earliest time that another
+ * query does not give. Its answer is no earlier than `bound`: its earliest contact so
+ * far or its earliest box left, moved back by the tolerance (cs_final_time).
+ * - Where the bound is later than a contact found for the object, so is the answer:
+ *   the query that found the contact answers no later than it, and goes on (its own
+ *   bound is no later than its contact, so it never gives itself up).
+ * - Where a round before this one found a contact at 0 for the object, its query
+ *   answers 0, and answers can be no earlier. That query goes on: from then on its
+ *   earliest contact so far (`before`) is 0, and such a query never gives up here. */
+inline int cs_covered(__global const uint* found, const uint object, const real bound, const real before,
+                      const uint round)
+{
+  return bound > (real)as_float(found[2 * object]) || (before > 0 && found[2 * object + 1] < round);
+}
+
+inline int cs_not_earliest(const cs_refine_state* seen, __global const uint* first, const uint round,
+                           const real before, const real tolerance, __global const uint* vertex_object,
+                           __global const uint* found)
+{
+  if (seen->flags & CS_FLAG_NOT_EARLIEST) return 1;
+  const real bound = cs_final_time(fmin(before, (real)as_float(first[(round + 2) % 3])), 1, tolerance);
+  if (!(bound > 0) && !(before > 0)) return 0;
+  const uint2 o = cs_query_objects(seen, vertex_object);
+  return cs_covered(found, o.x, bound, before, round) && cs_covered(found, o.y, bound, before, round);
+}
+
+inline void cs_found_at(volatile __global uint* found, const uint object, const uint key, const uint round)
+{
+  if (key < found[2 * object]) atomic_min(&found[2 * object], key);
+  if (key == 0 && round < found[2 * object + 1]) atomic_min(&found[2 * object + 1], round);
+}
+#endif
 
 /* A small box around the first touch that the cubic solver finds: along each parameter
  * F moves by half the tolerance from its centre, so a round or two of halving finds a
@@ -143,6 +226,22 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   s.work[0] = s.work[1] = s.work[2] = 0;
   s.flags = pair.z ? CS_FLAG_VERTEX_FACE : 0u;
   cs_pair_vertices(pair.xy, pair.z, faces, edges, s.vertices);
+#if CS_EARLIEST_ACROSS
+  /* Before any round, and again when the list overflowed and the search starts over:
+   * contacts found by a cut-short search must not give up queries. Every store is the
+   * same value; the test keeps most of them off the few objects' words. */
+  if (earliest_only) {
+    __global uint* first = cs_first_starts(state, n, i);
+    first[0] = first[1] = CS_NO_TIME;
+    first[2] = 0; /* round 0's: the root box's */
+    const uint2 o = cs_query_objects(&s, vertex_object);
+    for (int k = 0; k < 2; ++k) {
+      const uint object = k ? o.y : o.x;
+      if (found[2 * object] != CS_NO_TIME) found[2 * object] = CS_NO_TIME;
+      if (found[2 * object + 1] != 0xffffffffu) found[2 * object + 1] = 0xffffffffu;
+    }
+  }
+#endif
   /* In single precision only. In double, where the search's answers are within rounding
    * of the exact time, a contact found early leaves the root box's halves to be cut
    * short by the tolerance before it: the median error of the times on the real steps
@@ -178,15 +277,24 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const uint last_splits = seen.work[(round + 2) % 3]; /* this round's boxes, halved */
       const uint work = it.work + last_splits;
       const int vertex_face = (seen.flags & CS_FLAG_VERTEX_FACE) != 0;
-      real points[24];
-      cs_vertex_points(seen.vertices, x0, x1, points);
-      const cs_query q = cs_points_query(points, exact_input);
-      const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
-      const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
       int slack = 0, limited = 0;
       real t = before;
-      visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
-                           out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
+#if CS_EARLIEST_ACROSS
+      __global uint* first = cs_first_starts(state, n, it.query);
+      const int given_up = earliest_only && cs_not_earliest(&seen, first, round, before, tolerance, vertex_object, found);
+      if (given_up && !(seen.flags & CS_FLAG_NOT_EARLIEST)) atomic_or(&s->flags, CS_FLAG_NOT_EARLIEST);
+#else
+      const int given_up = 0;
+#endif
+      if (!given_up) {
+        real points[24];
+        cs_vertex_points(seen.vertices, x0, x1, points);
+        const cs_query q = cs_points_query(points, exact_input);
+        const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
+        const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
+        visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
+                             out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
+      }
       cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       /* After the visit: issued before it, this store to a word that every box of the
        * query writes made cloth-ball's refinement a third slower in single precision. */
@@ -197,6 +305,22 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
         lo.query = hi.query = it.query;
         lo.work = hi.work = work;
       }
+#if CS_EARLIEST_ACROSS
+      if (earliest_only) {
+        first[(round + 1) % 3] = CS_NO_TIME;
+        /* Of the halves, lo starts no later. */
+        if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
+          const uint start = cs_float_key_down(lo.box.t0);
+          if (start < first[round % 3]) atomic_min(&first[round % 3], start);
+        }
+        if (visit == CS_BOX_HIT) {
+          const uint2 o = cs_query_objects(&seen, vertex_object);
+          const uint key = cs_float_key_up(t);
+          cs_found_at(found, o.x, key, round);
+          cs_found_at(found, o.y, key, round);
+        }
+      }
+#endif
     }
     const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : 0u;
     const uint at = cs_worklist_append(group, counts, round, boxes);
@@ -217,7 +341,7 @@ __kernel void cs_refine_finish(CS_REFINE_PARAMS, __global const cs_refine_state*
     const cs_refine_state s = state[i];
     const real best = fmin(cs_time_of(s.best[0]), cs_time_of(s.best[1]));
     const uint status = (s.flags & CS_FLAG_LIMIT) ? CS_LIMIT : best <= 1 ? CS_COLLIDES : CS_SEPARATE;
-    if (status != CS_SEPARATE) {
+    if (status != CS_SEPARATE && !(s.flags & CS_FLAG_NOT_EARLIEST)) {
       const uint4 q = queries[i];
       const uint4 contact = cs_contact(q.xy, cs_final_time(best, s.flags & CS_FLAG_SLACK, tolerance), status);
       if (q.z) CS_EMIT(vf_contacts, contact);

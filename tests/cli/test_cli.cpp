@@ -182,7 +182,7 @@ TEST_CASE("run --no-profile reports the same contacts, its wall time and no devi
   CHECK(report["steps"][0]["passes"]["front update"]["ms"].is_null());
 }
 
-TEST_CASE("run --earliest-only counts the same contacts and gives the earliest time without them", "[cli][quick]")
+TEST_CASE("run --earliest-only gives the earliest time without reading or sorting the contacts", "[cli][quick]")
 {
   const fs::path dir = fresh_dir("cstreams-cli-earliest");
   const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
@@ -191,14 +191,19 @@ TEST_CASE("run --earliest-only counts the same contacts and gives the earliest t
   const auto all = nlohmann::json::parse(std::ifstream(dir / "all.json"));
   const auto earliest = nlohmann::json::parse(std::ifstream(dir / "earliest.json"));
   CHECK(earliest["earliest_only"] == true);
-  CHECK(earliest["steps"][0]["contacts"] == all["steps"][0]["contacts"]);
   CHECK_FALSE(earliest["steps"][0]["passes"].contains("canonical contacts"));
   REQUIRE(all["steps"][0]["passes"].contains("canonical contacts"));
-  // Reading the contacts costs the launches of their mapping and sort, and one read.
+  // The conservative solver settles only the pairs that may come first: some, not all.
   const auto &with = all["steps"][0], without = earliest["steps"][0];
-  CHECK(with["launches"].get<int>() - without["launches"].get<int>() ==
-        with["passes"]["canonical contacts"]["launches"].get<int>());
-  CHECK(with["blocking_reads"].get<int>() - without["blocking_reads"].get<int>() == 1);
+  CHECK(without["contacts"].get<int>() > 0);
+  CHECK(without["contacts"].get<int>() < with["contacts"].get<int>());
+  // Reading the contacts costs the launches of their mapping and sort, and one read;
+  // refining the rest, rounds and their counter reads.
+  const auto rounds = [](const nlohmann::json& step) { return step["passes"]["refine open queries"]["launches"].get<int>(); };
+  CHECK(rounds(without) < rounds(with));
+  CHECK(with["launches"].get<int>() - without["launches"].get<int>() >=
+        with["passes"]["canonical contacts"]["launches"].get<int>() + rounds(with) - rounds(without));
+  CHECK(with["blocking_reads"].get<int>() - without["blocking_reads"].get<int>() >= 1);
   CHECK(without["blocking_reads"].get<int>() >= 1);
   // The earliest time, rounded down to float on the device.
   const double exact = all["earliest_toi"].get<double>(), rounded = earliest["earliest_toi"].get<double>();

@@ -345,6 +345,75 @@ TEST_CASE("a device that ends loops early reports the same contacts, searching f
                     Catch::Contains("runs out of the device's loop trips") && Catch::Contains("within the front's budget"));
 }
 
+namespace {
+
+std::uint64_t refined_boxes(const DetectorStats& stats)
+{
+  for (const auto& p : stats.run.passes)
+    if (p.name == "refine open queries") return p.list_items;
+  return 0;
+}
+
+// Steps `scene` from frame 0 through two detectors, one reporting contacts and one
+// only the earliest times, and checks that they give the same times, object by object.
+struct EarliestRun {
+  std::uint64_t all_boxes = 0, earliest_boxes = 0;  // refined, over the steps
+  std::size_t at_zero = 0, later = 0;               // objects' earliest times: 0, and in (0, 1)
+};
+
+EarliestRun compare_earliest(const Scene& scene, std::size_t steps, const DetectorOptions& options)
+{
+  Detector all(cstreams::test::device(), describe(scene, 0), options);
+  Detector earliest(cstreams::test::device(), describe(scene, 0), options);
+  EarliestRun run;
+  for (std::size_t frame = 0; frame < steps; ++frame) {
+    INFO("frame " << frame);
+    for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
+      if (scene.objects[o].kind != ObjectKind::static_) {
+        all.set_positions(o, scene.positions(o, frame + 1));
+        earliest.set_positions(o, scene.positions(o, frame + 1));
+      }
+    all.detect();
+    earliest.detect(Report::earliest_toi);
+    const std::vector<double> expected = all.earliest_toi();
+    CHECK(earliest.earliest_toi() == expected);
+    run.at_zero += std::count(expected.begin(), expected.end(), 0.0);
+    run.later += std::count_if(expected.begin(), expected.end(), [](double t) { return t > 0 && t < 1; });
+    run.all_boxes += refined_boxes(all.stats());
+    run.earliest_boxes += refined_boxes(earliest.stats());
+  }
+  UNSCOPED_INFO("boxes " << run.all_boxes << " against " << run.earliest_boxes << "; earliest times at 0: "
+                         << run.at_zero << ", later: " << run.later);
+  return run;
+}
+
+}  // namespace
+
+// Report::earliest_toi lets the conservative refinement give up the queries that can no
+// longer hold an object's earliest time (refine.cl): where a contact found for each of
+// its objects is earlier than the query's answer can be (bodies colliding at different
+// times), or where its objects already touch at time 0 (cloth resting on itself). The
+// times must stay the full list's, object by object.
+TEST_CASE("earliest times alone equal the full list's, object by object, with less refinement", "[detector][quick]")
+{
+  const Scene bodies = cstreams::test::generated_scene("n-body", 24, 40);
+  const Scene funnel = cstreams::test::cloth_funnel();
+  for (auto precision : {Precision::single, Precision::double_}) {
+    INFO(to_string(precision));
+    if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
+    DetectorOptions options;
+    options.solver.precision = precision;
+    const EarliestRun apart = compare_earliest(bodies, bodies.frame_count() - 1, options);
+    CHECK(apart.later > 0);
+    CHECK(apart.earliest_boxes < apart.all_boxes);
+    if (precision == Precision::single) {
+      const EarliestRun touching = compare_earliest(funnel, 1, options);
+      CHECK(touching.at_zero == 1);
+      CHECK(touching.earliest_boxes < touching.all_boxes / 4);
+    }
+  }
+}
+
 TEST_CASE("device contacts equal the solver's on the host's candidates, in both precisions", "[detector][quick]")
 {
   const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 36, 40);

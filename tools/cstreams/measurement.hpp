@@ -69,7 +69,7 @@ struct Measurement {
   std::vector<double> host_ms, device_ms;
   std::size_t peak_bytes = 0;  // the device's high-water mark over every step run, warm-ups included
   std::vector<Contact> contacts;      // every step's, in step order, each step canonical (none if earliest_only)
-  std::size_t contact_count = 0;      // over all steps, as the device counted them
+  std::size_t contact_count = 0;      // over all steps, as the device counted them (DetectorStats::contacts)
   std::vector<std::size_t> step_ends;  // where each step's contacts end in `contacts`
   // The step with the earliest contact of the first step that has one (with
   // earliest_only, the time rounded down to float, as Detector::earliest_toi gives it).

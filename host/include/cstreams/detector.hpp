@@ -79,7 +79,9 @@ struct DetectorOptions {
 // What detect() reads back.
 enum class Report {
   contacts,     // every contact (and the earliest time per object)
-  earliest_toi  // only the earliest time of impact per object
+  // Only the earliest time of impact per object, the very one the full list gives; the
+  // conservative solver then stops refining pairs that cannot hold one.
+  earliest_toi
 };
 
 struct DetectorStats {
@@ -87,7 +89,10 @@ struct DetectorStats {
   std::size_t front_pairs = 0;      // the front carried to the next step
   std::uint32_t front_level_cap = 0;  // deepest level the front may hold (deferred)
   unsigned front_retries = 0;       // runs repeated at a coarser front to fit the budget
-  std::size_t triangle_pairs = 0, vf_candidates = 0, ee_candidates = 0, contacts = 0;
+  std::size_t triangle_pairs = 0, vf_candidates = 0, ee_candidates = 0;
+  // With Report::earliest_toi, the conservative solver settles only the pairs that may
+  // hold an object's earliest time, and this counts their contacts alone.
+  std::size_t contacts = 0;
   double host_ms = 0;               // wall time of the last detect(), uploads and readbacks included
   unsigned launches = 0;            // kernel launches of the last detect(), every one
   unsigned blocking_reads = 0;      // and its blocking reads (counters, flags, contacts)

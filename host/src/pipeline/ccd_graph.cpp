@@ -301,21 +301,30 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
 
   // One box a work-item, breadth first across the device (refine.cl): an item is a
   // query index, its work and a box of six reals; the state of a query two keys of at
-  // most one real each (a float on devices without 64-bit atomics) and eight words.
+  // most one real each (a float on devices without 64-bit atomics) and eight words,
+  // and in a scene of objects three more.
   // The round kernel is heavy in registers (255 a work-item in double on the H200): in
   // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
   // 256 (BENCHMARKS.md).
   constexpr std::size_t refine_group = 64;
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
-  auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", options})
+  const bool objects = in.object_contacts != StreamId{};
+  const std::size_t state_bytes = 2 * real_bytes + 32 + (objects ? 12 : 0);
+  auto& pass = g.pass("refine open queries",
+                      {refine, "cs_refine_finish", options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "")})
                    .launch_over(open)
-                   .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 32, refine_items,
+                   .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, state_bytes, refine_items,
                             refine_group})
                    .emit(vf)
                    .emit(ee)
                    .expect_items(0.5);
   pass.arg(buffer_of(open)).arg(count_of(open));
   real(real(geometry_args(pass, in, solver.precision), solver.tolerance), solver.min_separation).arg(value_of(cl_uint(solver.max_iterations)));
+  if (objects)
+    pass.write(in.object_contacts)
+        .arg(param_of(in.earliest_only))
+        .arg(buffer_of(in.vertex_object))
+        .arg(buffer_of(in.object_contacts));
   return contacts;
 }
 
@@ -505,6 +514,14 @@ struct GraphBuilder {
     in.candidates = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
     if (s.kept_vf != runtime::StreamId{}) in.candidates.emplace_back(s.kept_vf, ContactKind::vertex_face);
     if (s.kept_ee != runtime::StreamId{}) in.candidates.emplace_back(s.kept_ee, ContactKind::edge_edge);
+    s.vertex_object = g.fixed("vertex objects", 4, t.vertex_count);
+    if (solver.solver == Solver::conservative) {
+      s.object_contacts = g.fixed("earliest contact found", 8, l.slots.size());
+      s.earliest_only = g.param("earliest only", 4);
+      in.vertex_object = s.vertex_object;
+      in.object_contacts = s.object_contacts;
+      in.earliest_only = s.earliest_only;
+    }
     s.contacts = add_elementary_tests(g, in, solver, refine_items, [this](std::size_t guess) { return sized(guess); });
   }
 
@@ -512,7 +529,6 @@ struct GraphBuilder {
   void earliest_toi()
   {
     using namespace runtime;
-    s.vertex_object = g.fixed("vertex objects", 4, t.vertex_count);
     s.earliest = g.fixed("earliest toi", 4, l.slots.size());
     const char* earliest = "ccd/earliest.cl";
     const std::string time_options = "-DCS_REAL_DOUBLE=" + std::to_string(int(exact_input));

@@ -210,6 +210,7 @@ void Detector::run_step(Report report)
   const std::uint64_t launches = s.context.kernel_launches(), reads = s.context.blocking_reads();
   s.context.reset_memory_high_water();
   const CcdStreams& st = s.streams;
+  if (has(st.object_contacts)) s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
   s.stats.front_retries = s.front.run(*s.scheduler, st);
   runtime::Scheduler& q = *s.scheduler;
   if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);

@@ -69,7 +69,9 @@ struct CcdStreams {
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
   runtime::StreamId earliest;
+  runtime::StreamId object_contacts;  // refine.cl's `found`: per object, the earliest contact so far
   runtime::ParamId level_cap;
+  runtime::ParamId earliest_only;     // 1: the step reports only each object's earliest time
   std::vector<std::pair<runtime::StreamId, ContactKind>> contacts;  // one per candidate stream
 };
 
@@ -81,6 +83,12 @@ struct TestInputs {
   runtime::StreamId x0, x1, faces, edges;
   runtime::StreamId x0_float, x1_float;
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
+  // A scene of objects: every vertex's object, two words per object, and a 4-byte
+  // parameter. Where the parameter is nonzero, the step reports only each object's
+  // earliest time, and the conservative refinement gives up the queries that cannot
+  // hold one (refine.cl). Unset where pairs belong to no objects.
+  runtime::StreamId vertex_object, object_contacts;
+  runtime::ParamId earliest_only;
 };
 
 // The arguments a kernel over one stream of candidate pairs starts with
