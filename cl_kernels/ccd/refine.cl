@@ -128,10 +128,11 @@ inline uint cs_float_key_up(const real t)
 #endif
 
 #if CS_EARLIEST_ACROSS
-/* Built so, the state of the n queries is followed by three words a query: first[r % 3]
- * is the earliest start of round r's boxes as a float rounded down, gathered by round
- * r - 1 as work[] is. Apart from the rest, so that steps that need no earliest time
- * read the state as they would without it. */
+/* Built so, the state of the n queries is followed by three words a query, held only
+ * while earliest_only is set (Worklist::extra_state_bytes): first[r % 3] is the earliest
+ * start of round r's boxes as a float rounded down, gathered by round r - 1 as work[]
+ * is. Apart from the rest, so that steps that need no earliest time read the state as
+ * they would without it, and hold no memory for it. */
 inline __global uint* cs_first_starts(__global cs_refine_state* state, const uint n, const uint query)
 {
   return (__global uint*)(state + n) + 3 * query;

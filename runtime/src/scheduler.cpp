@@ -380,6 +380,13 @@ struct Scheduler::State {
     return rerun;
   }
 
+  // Whether a 4-byte parameter is set and not 0.
+  bool nonzero(ParamId param) const
+  {
+    const auto& bytes = params.at(param.index);
+    return bytes.size() == 4 && (bytes[0] | bytes[1] | bytes[2] | bytes[3]) != 0;
+  }
+
   // The pass's own arguments; returns the index of the next one.
   unsigned bind_own_args(const PassSpec& spec, const Kernel& k)
   {
@@ -522,7 +529,8 @@ struct Scheduler::State {
     const std::string& label = p.spec->name;
     const std::size_t wg = context.work_group_size();
     const std::size_t round_group = w.round_group ? std::min(w.round_group, wg) : wg;
-    with_memory([&] { ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * w.state_bytes, "work list state"); });
+    const std::size_t state_bytes = w.state_bytes + (w.extra_state_bytes > 0 && nonzero(w.extra_state_while) ? w.extra_state_bytes : 0);
+    with_memory([&] { ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * state_bytes, "work list state"); });
     if (n == 0) return;
     // Lists taken by memory pressure come back at their size, not at one that the rounds
     // would overflow again.

@@ -96,6 +96,10 @@ std::vector<std::size_t> StreamGraph::schedule() const
         throw Error("pass " + pass.name +
                     " refines a work list but lacks an input stream, a seed or round kernel, a round size or "
                     "item and state sizes in whole words, or updates a stream in place");
+      if (w->extra_state_bytes % 4 != 0 ||
+          (w->extra_state_bytes > 0 &&
+           (w->extra_state_while.index >= params_.size() || params_[w->extra_state_while.index].bytes != 4)))
+        throw Error("pass " + pass.name + " keeps extra state that is not in whole words or not behind a 4-byte parameter");
     }
     for (StreamId s : pass.updates) {
       if (stream(s).variable) throw Error("pass " + pass.name + " updates variable-length stream " + stream(s).name);

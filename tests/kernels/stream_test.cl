@@ -96,26 +96,29 @@ __kernel void test_times_two(__global uint* values, const uint n)
 
 /* A work list: input i splits into two items a round until depth test_depth(value),
  * and each leaf counts itself in the input's state, so input i ends with 2^depth, twice
- * that where the seed gives it two trees. */
+ * that where the seed gives it two trees. With `deepest` set, the state also holds,
+ * after the n counts, each input's deepest leaf (the work list's extra state), and the
+ * count comes out shifted left by four bits with the depth below. */
 #include "runtime/worklist.h"
 
 uint test_depth(uint value) { return test_hash(value ^ 0x9e3779b9u) % 12u; }
 
 /* Inputs whose value is odd get a second tree from the seed. */
-__kernel void test_tree_seed(__global const uint* values, const uint n, __global uint* leaves, __global uint2* list,
-                             __global uint* counts, const uint capacity)
+__kernel void test_tree_seed(__global const uint* values, const uint n, const uint deepest, __global uint* leaves,
+                             __global uint2* list, __global uint* counts, const uint capacity)
 {
   const uint i = get_global_id(0);
   if (i >= n) return;
   list[i] = (uint2)(i, 0);
   leaves[i] = 0;
+  if (deepest) leaves[n + i] = 0;
   if (values[i] & 1u) {
     const uint at = cs_worklist_seed_index(counts, capacity);
     if (at < capacity) list[at] = (uint2)(i, 0);
   }
 }
 
-__kernel void test_tree_round(__global const uint* values, const uint n, __global uint* leaves,
+__kernel void test_tree_round(__global const uint* values, const uint n, const uint deepest, __global uint* leaves,
                               __global const uint2* in, __global uint2* out, __global uint* counts, const uint round,
                               const uint capacity)
 {
@@ -128,7 +131,10 @@ __kernel void test_tree_round(__global const uint* values, const uint n, __globa
     if (i < items) {
       item = in[i];
       if (item.y < test_depth(values[item.x])) k = 2;
-      else atomic_inc(&leaves[item.x]);
+      else {
+        atomic_inc(&leaves[item.x]);
+        if (deepest) atomic_max(&leaves[n + item.x], item.y);
+      }
     }
     const uint at = cs_worklist_append(group, counts, round, k);
     for (uint j = 0; j < k; ++j)
@@ -137,12 +143,12 @@ __kernel void test_tree_round(__global const uint* values, const uint n, __globa
   cs_worklist_check_loops(counts, round);
 }
 
-__kernel void test_tree_finish(__global const uint* values, const uint n, __global const uint* leaves,
-                               CS_EMITTER_PARAMS(uint2, counted))
+__kernel void test_tree_finish(__global const uint* values, const uint n, const uint deepest,
+                               __global const uint* leaves, CS_EMITTER_PARAMS(uint2, counted))
 {
   CS_EMITTER_BEGIN(counted);
   const uint i = get_global_id(0);
-  if (i < n) CS_EMIT(counted, (uint2)(i, leaves[i]));
+  if (i < n) CS_EMIT(counted, (uint2)(i, deepest ? leaves[i] << 4 | leaves[n + i] : leaves[i]));
   CS_EMITTER_END(counted);
 }
 

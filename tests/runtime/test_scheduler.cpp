@@ -496,6 +496,47 @@ TEST_CASE("passes update a fixed stream in place, in declaration order, before i
   }
 }
 
+namespace {
+
+// The work list of test_tree_* (stream_test.cl) over `n` values, with the deepest leaf
+// of each input in its extra state while `deepest` is set.
+struct Tree {
+  StreamId values, counted;
+  ParamId deepest;
+};
+
+Tree add_tree(StreamGraph& g, std::size_t n, std::size_t round_items, std::size_t round_group)
+{
+  Tree t{g.fixed("values", 4, n), g.variable("counted", 8, 16), g.param("deepest", 4)};
+  Worklist list{"test_tree_seed", "test_tree_round", 8, 4, 2 * round_items, round_group};
+  list.extra_state_bytes = 4;
+  list.extra_state_while = t.deepest;
+  g.pass("tree", {program, "test_tree_finish"})
+      .launch_over(t.values)
+      .refine(list)
+      .emit(t.counted)
+      .arg(buffer_of(t.values))
+      .arg(count_of(t.values))
+      .arg(param_of(t.deepest));
+  return t;
+}
+
+std::uint32_t tree_depth(std::uint32_t value) { return cstreams::test::test_hash(value ^ 0x9e3779b9u) % 12u; }
+
+// Input i's leaves (2^depth a tree, two trees for odd values), and with `with_depth`
+// the count shifted left by four bits with the depth below.
+std::vector<Pair> tree_counts(const std::vector<std::uint32_t>& v, bool with_depth)
+{
+  std::vector<Pair> counts;
+  for (std::uint32_t i = 0; i < v.size(); ++i) {
+    const std::uint32_t leaves = (v[i] & 1u ? 2u : 1u) << tree_depth(v[i]);
+    counts.push_back({i, with_depth ? leaves << 4 | tree_depth(v[i]) : leaves});
+  }
+  return counts;
+}
+
+}  // namespace
+
 TEST_CASE("a work list runs its rounds on the device, grows when it overflows and loses no item",
           "[runtime][scheduler][worklist][quick]")
 {
@@ -511,31 +552,23 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
   auto& ctx = bounded ? limited : cstreams::test::device();
   for (const std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(3001)}) {
     StreamGraph g;
-    const auto values = g.fixed("values", 4, n);
-    const auto counted = g.variable("counted", 8, 16);
-    g.pass("tree", {program, "test_tree_finish"})
-        .launch_over(values)
-        .refine({"test_tree_seed", "test_tree_round", 8, 4, 2 * ctx.work_group_size(), round_group})
-        .emit(counted)
-        .arg(buffer_of(values))
-        .arg(count_of(values));
+    const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), round_group);
     Scheduler s(ctx, g);
+    s.set(tree_streams.deepest, cl_uint(0));
     const auto v = random_values(n, 23);
-    std::vector<Pair> expected;
+    const std::vector<Pair> expected = tree_counts(v, false);
     std::uint64_t items = 0;
     unsigned deepest = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
-      const std::uint32_t depth = cstreams::test::test_hash(v[i] ^ 0x9e3779b9u) % 12u;
       const std::uint32_t trees = v[i] & 1u ? 2 : 1;
-      expected.push_back({i, trees << depth});
-      items += trees * ((std::uint64_t(2) << depth) - 1);
-      deepest = std::max(deepest, depth + 1);
+      items += trees * ((std::uint64_t(2) << tree_depth(v[i])) - 1);
+      deepest = std::max(deepest, tree_depth(v[i]) + 1);
     }
-    s.upload(values, v);
+    s.upload(tree_streams.values, v);
     for (int frame = 0; frame < 2; ++frame) {
       INFO("n = " << n << ", frame " << frame << (bounded ? ", bounded loops" : "") << ", round group " << round_group);
       s.run();
-      CHECK(sorted(s.download<Pair>(counted)) == expected);
+      CHECK(sorted(s.download<Pair>(tree_streams.counted)) == expected);
       const PassStats& tree = s.stats().passes.at(0);
       CHECK(tree.rounds == deepest);
       CHECK(tree.list_items == items);
@@ -544,6 +577,29 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
       if (bounded && n > 0) CHECK(s.stats().readbacks >= deepest);
     }
   }
+}
+
+// An optional mode's state (refine.cl's earliest box starts, kept only for steps that
+// report earliest times alone) costs nothing while the mode is off.
+TEST_CASE("a work list holds its extra state only while its parameter is set", "[runtime][scheduler][worklist][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 3001;
+  StreamGraph g;
+  const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0);
+  Scheduler s(ctx, g);
+  const auto v = random_values(n, 29);
+  s.upload(tree_streams.values, v);
+  const auto run = [&](cl_uint deepest) {
+    s.set(tree_streams.deepest, deepest);
+    s.run();
+    CHECK(sorted(s.download<Pair>(tree_streams.counted)) == tree_counts(v, deepest != 0));
+    return s.stats().passes.at(0).scratch_bytes;
+  };
+  run(0);  // the list grows to its size
+  const std::size_t without = run(0);
+  CHECK(run(1) == without + 4 * n);
+  CHECK(run(0) == without + 4 * n);  // held, as the state is, until memory runs short
 }
 
 TEST_CASE("a pass launched over several streams gets a work-item for each of their items", "[runtime][scheduler][quick]")
@@ -677,6 +733,14 @@ TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][sche
   StreamGraph list_without_input;
   list_without_input.pass("p", {program, "k"}).launch_items(4).refine({"seed", "round", 8, 4, 64});
   CHECK_THROWS_WITH(list_without_input.schedule(), Catch::Contains("pass p refines a work list but lacks"));
+
+  StreamGraph extra_behind_wide_param;
+  auto inputs = extra_behind_wide_param.fixed("inputs", 4, 1);
+  Worklist gated{"seed", "round", 8, 4, 64};
+  gated.extra_state_bytes = 4;
+  gated.extra_state_while = extra_behind_wide_param.param("mode", 8);
+  extra_behind_wide_param.pass("p", {program, "k"}).launch_over(inputs).refine(gated);
+  CHECK_THROWS_WITH(extra_behind_wide_param.schedule(), Catch::Contains("not behind a 4-byte parameter"));
 
   StreamGraph stop_unwritten;
   auto flag = stop_unwritten.fixed("flag", 4, 1);

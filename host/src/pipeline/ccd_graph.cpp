@@ -302,19 +302,23 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   // One box a work-item, breadth first across the device (refine.cl): an item is a
   // query index, its work and a box of six reals; the state of a query two keys of at
   // most one real each (a float on devices without 64-bit atomics) and eight words,
-  // and in a scene of objects three more.
+  // and in a scene of objects three more for the steps that report earliest times alone.
   // The round kernel is heavy in registers (255 a work-item in double on the H200): in
   // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
   // 256 (BENCHMARKS.md).
   constexpr std::size_t refine_group = 64;
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
+  runtime::Worklist boxes{"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 32, refine_items,
+                          refine_group};
   const bool objects = in.object_contacts != StreamId{};
-  const std::size_t state_bytes = 2 * real_bytes + 32 + (objects ? 12 : 0);
+  if (objects) {
+    boxes.extra_state_bytes = 12;
+    boxes.extra_state_while = in.earliest_only;
+  }
   auto& pass = g.pass("refine open queries",
                       {refine, "cs_refine_finish", options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "")})
                    .launch_over(open)
-                   .refine({"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, state_bytes, refine_items,
-                            refine_group})
+                   .refine(boxes)
                    .emit(vf)
                    .emit(ee)
                    .expect_items(0.5);

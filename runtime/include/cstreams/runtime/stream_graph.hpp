@@ -75,6 +75,11 @@ struct Worklist {
   // the context's). Groups share nothing but an append, so kernels heavy in registers
   // can run in small groups, as many at once as the device's registers hold.
   std::size_t round_group = 0;
+  // State that an optional mode of the rounds keeps: this many bytes per input more,
+  // after the n inputs' states, held only while the 4-byte parameter `extra_state_while`
+  // is nonzero, so that runs without the mode hold none of it.
+  std::size_t extra_state_bytes = 0;
+  ParamId extra_state_while{};
 };
 
 // One kernel over the items of a stream, and what it reads and writes.
