@@ -355,16 +355,20 @@ std::uint64_t refined_boxes(const DetectorStats& stats)
 }
 
 // Steps `scene` from frame 0 through two detectors, one reporting contacts and one
-// only the earliest times, and checks that they give the same times, object by object.
+// (on `earliest_device`) only the earliest times, and checks that they give the same
+// times, object by object.
 struct EarliestRun {
   std::uint64_t all_boxes = 0, earliest_boxes = 0;  // refined, over the steps
   std::size_t at_zero = 0, later = 0;               // objects' earliest times: 0, and in (0, 1)
+  std::size_t earliest_peak = 0;                    // the most the earliest times' device held
+  unsigned sliced = 0;                              // their steps that ran in slices
 };
 
-EarliestRun compare_earliest(const Scene& scene, std::size_t steps, const DetectorOptions& options)
+EarliestRun compare_earliest(const Scene& scene, std::size_t steps, const DetectorOptions& options,
+                             runtime::Context& earliest_device = cstreams::test::device())
 {
   Detector all(cstreams::test::device(), describe(scene, 0), options);
-  Detector earliest(cstreams::test::device(), describe(scene, 0), options);
+  Detector earliest(earliest_device, describe(scene, 0), options);
   EarliestRun run;
   for (std::size_t frame = 0; frame < steps; ++frame) {
     INFO("frame " << frame);
@@ -381,6 +385,8 @@ EarliestRun compare_earliest(const Scene& scene, std::size_t steps, const Detect
     run.later += std::count_if(expected.begin(), expected.end(), [](double t) { return t > 0 && t < 1; });
     run.all_boxes += refined_boxes(all.stats());
     run.earliest_boxes += refined_boxes(earliest.stats());
+    run.earliest_peak = std::max(run.earliest_peak, earliest.stats().peak_bytes);
+    run.sliced += earliest.stats().run.slices > 1;
   }
   UNSCOPED_INFO("boxes " << run.all_boxes << " against " << run.earliest_boxes << "; earliest times at 0: "
                          << run.at_zero << ", later: " << run.later);
@@ -412,6 +418,30 @@ TEST_CASE("earliest times alone equal the full list's, object by object, with le
       CHECK(touching.earliest_boxes < touching.all_boxes / 4);
     }
   }
+}
+
+// Short of memory, a step runs the passes from the one that does not fit onwards in
+// slices of its input, each refining its own queries: a slice's contacts give up only
+// queries of the same slice, and the times must still be the full list's.
+TEST_CASE("earliest times alone stay the full list's when a memory budget runs steps in slices", "[detector][quick]")
+{
+  const Scene bodies = cstreams::test::generated_scene("n-body", 24, 40);
+  const std::size_t steps = bodies.frame_count() - 1;
+  const DetectorOptions options;
+  runtime::Context unlimited(filter_from_environment());
+  const std::size_t peak = compare_earliest(bodies, steps, options, unlimited).earliest_peak;
+  unsigned sliced = 0;
+  for (const double share : {0.8, 0.65, 0.5}) {
+    runtime::Context limited(filter_from_environment());
+    limited.set_memory_limit(std::size_t(share * double(peak)));
+    INFO("budget " << share << " of the unbudgeted peak, " << peak << " bytes");
+    try {
+      sliced += compare_earliest(bodies, steps, options, limited).sliced;
+    } catch (const runtime::DeviceMemoryExhausted&) {
+      CHECK(share < 0.8);
+    }
+  }
+  CHECK(sliced > 0);
 }
 
 TEST_CASE("device contacts equal the solver's on the host's candidates, in both precisions", "[detector][quick]")
