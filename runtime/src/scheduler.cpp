@@ -589,9 +589,9 @@ struct Scheduler::State {
       }
       if (counts[3] <= l.capacity) {
         l.rounds = counts[7];
-        p.stats.rounds = counts[7];
-        p.stats.list_items = std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
-        p.stats.widest_list = counts[6];
+        p.stats.rounds += counts[7];
+        p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
+        p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
         return;
       }
       // Rounds after the one that overflowed saw a cut list and asked for too little.
@@ -1141,8 +1141,15 @@ struct Scheduler::State {
     for (std::size_t j = first; j < passes.size(); ++j)
       if (every_slice[j]) {
         fall_back_to_global_counter(passes[j]);
-        // A slice's work list is sized by the slice, not by what the whole input needed.
-        if (passes[j].list) passes[j].list->released = 0;
+        // A slice's work list is sized by the slice, not by what the whole input needed;
+        // its statistics add up these slices alone, not an attempt that ran short.
+        if (passes[j].list) {
+          passes[j].list->released = 0;
+          PassStats& stats = passes[j].stats;
+          stats.rounds = 0;
+          stats.list_items = 0;
+          stats.widest_list = 0;
+        }
       }
     const std::size_t total = state(over).count, count = std::max<std::size_t>(1, (total + size - 1) / size);
     // A gathered stream takes what the last run gathered at once, instead of growing

@@ -602,6 +602,46 @@ TEST_CASE("a work list holds its extra state only while its parameter is set", "
   CHECK(run(0) == without + 4 * n);  // held, as the state is, until memory runs short
 }
 
+// Short of memory for its lists, a work list runs in slices of its inputs; its
+// statistics add up the slices, as a step's would without them.
+TEST_CASE("a work list run in slices reports the rounds and items of all of them", "[runtime][scheduler][worklist][quick]")
+{
+  const std::size_t n = 3001;
+  const auto v = random_values(n, 31);
+  std::uint64_t items = 0;
+  for (const std::uint32_t value : v) items += (value & 1u ? 2u : 1u) * ((std::uint64_t(2) << tree_depth(value)) - 1);
+  std::size_t peak = 0;
+  unsigned whole_rounds = 0;
+  for (const double share : {1.0, 0.5}) {
+    Context context(filter_from_environment());
+    context.programs().add_sources(test_kernel_sources());
+    if (share < 1) context.set_memory_limit(std::size_t(share * double(peak)));
+    StreamGraph g;
+    const Tree tree_streams = add_tree(g, n, context.work_group_size(), 0);
+    g.gather(tree_streams.counted);
+    Scheduler s(context, g);
+    s.set(tree_streams.deepest, cl_uint(0));
+    s.upload(tree_streams.values, v);
+    for (int frame = 0; frame < 2; ++frame) s.run();
+    INFO("share " << share << " of the peak, " << peak << " bytes");
+    // A slice's kernels number its inputs from 0: the counts alone must match.
+    const auto leaves = [](const std::vector<Pair>& counted) {
+      std::vector<std::uint32_t> c;
+      for (const Pair& p : counted) c.push_back(p[1]);
+      return sorted(c);
+    };
+    CHECK(leaves(s.download<Pair>(tree_streams.counted)) == leaves(tree_counts(v, false)));
+    const PassStats& tree = s.stats().passes.at(0);
+    CHECK(tree.list_items == items);
+    if (share < 1) {
+      CHECK(s.stats().slices > 1);
+      CHECK(tree.rounds > whole_rounds);
+    }
+    peak = context.memory_high_water();
+    whole_rounds = tree.rounds;
+  }
+}
+
 TEST_CASE("a pass launched over several streams gets a work-item for each of their items", "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();

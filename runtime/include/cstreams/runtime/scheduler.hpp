@@ -23,8 +23,9 @@ struct PassStats {
   std::uint64_t device_ns = 0;  // every launch issued for the pass, packing included
   unsigned launches = 0;
   unsigned reruns = 0;          // executions repeated after an overflow
-  // A work list's last execution: rounds that had items (launches beyond them found
-  // the list empty), items over all rounds, and the most in one round.
+  // A work list's rounds that had items (launches beyond them found the list empty),
+  // items over all rounds, and the most in one round; in a run that went in slices,
+  // added up over the slices (rounds and items) or the most of them (widest).
   unsigned rounds = 0;
   std::uint64_t list_items = 0;
   std::size_t widest_list = 0;
