@@ -535,6 +535,14 @@ std::vector<Pair> tree_counts(const std::vector<std::uint32_t>& v, bool with_dep
   return counts;
 }
 
+// Items over all rounds: a tree of depth d holds 2^(d+1) - 1 of them.
+std::uint64_t tree_items(const std::vector<std::uint32_t>& v)
+{
+  std::uint64_t items = 0;
+  for (const std::uint32_t value : v) items += (value & 1u ? 2u : 1u) * ((std::uint64_t(2) << tree_depth(value)) - 1);
+  return items;
+}
+
 }  // namespace
 
 TEST_CASE("a work list runs its rounds on the device, grows when it overflows and loses no item",
@@ -557,13 +565,9 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
     s.set(tree_streams.deepest, cl_uint(0));
     const auto v = random_values(n, 23);
     const std::vector<Pair> expected = tree_counts(v, false);
-    std::uint64_t items = 0;
+    const std::uint64_t items = tree_items(v);
     unsigned deepest = 0;
-    for (std::uint32_t i = 0; i < n; ++i) {
-      const std::uint32_t trees = v[i] & 1u ? 2 : 1;
-      items += trees * ((std::uint64_t(2) << tree_depth(v[i])) - 1);
-      deepest = std::max(deepest, tree_depth(v[i]) + 1);
-    }
+    for (const std::uint32_t value : v) deepest = std::max(deepest, tree_depth(value) + 1);
     s.upload(tree_streams.values, v);
     for (int frame = 0; frame < 2; ++frame) {
       INFO("n = " << n << ", frame " << frame << (bounded ? ", bounded loops" : "") << ", round group " << round_group);
@@ -608,8 +612,7 @@ TEST_CASE("a work list run in slices reports the rounds and items of all of them
 {
   const std::size_t n = 3001;
   const auto v = random_values(n, 31);
-  std::uint64_t items = 0;
-  for (const std::uint32_t value : v) items += (value & 1u ? 2u : 1u) * ((std::uint64_t(2) << tree_depth(value)) - 1);
+  const std::uint64_t items = tree_items(v);
   std::size_t peak = 0;
   unsigned whole_rounds = 0;
   for (const double share : {1.0, 0.5}) {
