@@ -360,6 +360,7 @@ std::uint64_t refined_boxes(const DetectorStats& stats)
 struct EarliestRun {
   std::uint64_t all_boxes = 0, earliest_boxes = 0;  // refined, over the steps
   std::size_t at_zero = 0, later = 0;               // objects' earliest times: 0, and in (0, 1)
+  std::size_t all_contacts = 0, earliest_contacts = 0;  // settled, over the steps
   std::size_t earliest_peak = 0;                    // the most the earliest times' device held
   unsigned sliced = 0;                              // their steps that ran in slices
 };
@@ -385,6 +386,8 @@ EarliestRun compare_earliest(const Scene& scene, std::size_t steps, const Detect
     run.later += std::count_if(expected.begin(), expected.end(), [](double t) { return t > 0 && t < 1; });
     run.all_boxes += refined_boxes(all.stats());
     run.earliest_boxes += refined_boxes(earliest.stats());
+    run.all_contacts += all.stats().contacts;
+    run.earliest_contacts += earliest.stats().contacts;
     run.earliest_peak = std::max(run.earliest_peak, earliest.stats().peak_bytes);
     run.sliced += earliest.stats().run.slices > 1;
   }
@@ -442,6 +445,27 @@ TEST_CASE("earliest times alone stay the full list's when a memory budget runs s
     }
   }
   CHECK(sliced > 0);
+}
+
+// Split into their connected components (n-body's balls, the armadillo and its
+// rollers), the real steps have many objects and contacts at many times.
+TEST_CASE("earliest times alone equal the full list's on real steps split into their bodies", "[detector][slow]")
+{
+  for (const auto& s : {cstreams::test::real_steps[3], cstreams::test::real_steps[2]}) {
+    const std::string dir = cstreams::test::benchmark_path(std::string("scalable-ccd-sample/") + s.scene + "/frames/");
+    const Scene scene = scene_from_frames({dir + s.frame0, dir + s.frame1}, true);
+    INFO("scene " << s.scene << ", " << scene.objects.size() << " objects");
+    REQUIRE(scene.objects.size() > 1);
+    for (auto precision : {Precision::single, Precision::double_}) {
+      if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
+      INFO(to_string(precision));
+      DetectorOptions options;
+      options.solver.precision = precision;
+      const EarliestRun run = compare_earliest(scene, 1, options);
+      CHECK(run.at_zero + run.later > 1);
+      CHECK(run.earliest_contacts < run.all_contacts);
+    }
+  }
 }
 
 TEST_CASE("device contacts equal the solver's on the host's candidates, in both precisions", "[detector][quick]")

@@ -11,7 +11,6 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <fstream>
 #include <set>
 #include <sys/stat.h>
@@ -205,39 +204,6 @@ TEST_CASE("the device pipeline reports every true pair of n-body and cloth-ball"
 {
   check_device_recall(cstreams::test::real_steps[3]);
   check_device_recall(cstreams::test::real_steps[4]);
-}
-
-// Report::earliest_toi gives up the refinement queries that cannot hold an object's
-// earliest time. Split into their connected components (n-body's balls, the armadillo
-// and its rollers), the real steps have many objects and contacts at many times; each
-// object's time must be the full list's, in both precisions.
-TEST_CASE("earliest times alone equal the full list's on real steps split into their bodies", "[detector][slow]")
-{
-  for (const RealStep* s : {&cstreams::test::real_steps[3], &cstreams::test::real_steps[2]}) {
-    const std::string dir = cstreams::test::benchmark_path(std::string("scalable-ccd-sample/") + s->scene + "/frames/");
-    const Scene scene = scene_from_frames({dir + s->frame0, dir + s->frame1}, true);
-    INFO("scene " << s->scene << ", " << scene.objects.size() << " objects");
-    REQUIRE(scene.objects.size() > 1);
-    for (auto precision : {Precision::single, Precision::double_}) {
-      if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
-      INFO(to_string(precision));
-      DetectorOptions options;
-      options.solver.precision = precision;
-      Detector all(cstreams::test::device(), describe(scene, 0), options);
-      Detector earliest(cstreams::test::device(), describe(scene, 0), options);
-      for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
-        if (scene.objects[o].kind != ObjectKind::static_) {
-          all.set_positions(o, scene.positions(o, 1));
-          earliest.set_positions(o, scene.positions(o, 1));
-        }
-      all.detect();
-      earliest.detect(Report::earliest_toi);
-      const std::vector<double> expected = all.earliest_toi();
-      CHECK(std::count_if(expected.begin(), expected.end(), [](double t) { return t < 1; }) > 1);
-      CHECK(earliest.earliest_toi() == expected);
-      CHECK(earliest.stats().contacts < all.stats().contacts);
-    }
-  }
 }
 
 TEST_CASE("the host reference misses none of the hand-made degenerate queries", "[host][reference][slow]")
