@@ -51,6 +51,9 @@ struct EmitterState {
   Buffer offsets, plan;
   std::size_t planned = 0;        // segments the plan covers; 0: none yet
   std::size_t planned_total = 0;  // items they emitted
+  // Segmented lock, where no plan fits: what a group may hold at most, from a forgotten
+  // plan's total spread over this run's groups (0: no such total).
+  std::size_t fresh = 0;
 };
 
 // Segmented lock: the spill pool's items per group (CS_SPILL_PER_GROUP in
@@ -446,7 +449,9 @@ struct Scheduler::State {
   std::size_t first_segment_capacity(const EmitterState& e) const
   {
     const bool per_group = options.registration == Registration::segmented_lock;
-    return std::max<std::size_t>(1, std::size_t(std::ceil(e.expected * double(per_group ? context.work_group_size() : 1))));
+    const std::size_t expected =
+        std::max<std::size_t>(1, std::size_t(std::ceil(e.expected * double(per_group ? context.work_group_size() : 1))));
+    return per_group && e.fresh > 0 ? std::min(expected, e.fresh) : expected;
   }
 
   const Buffer& plan_of(const EmitterState& e) const { return e.planned ? e.plan : no_plan; }
@@ -752,10 +757,17 @@ struct Scheduler::State {
   }
 
   // A plan from a run with many more or fewer groups (the burst of a first step searched
-  // from the roots, say) says nothing about this one's groups: they start afresh.
+  // from the roots, say) says nothing about this one's groups: they start afresh. Its
+  // total still says how much the pass emits where its input is the last run's output
+  // (the second step's front update, over the front the first step's search found), so
+  // no group starts with more than that total spread evenly, and a quarter more: cloth-
+  // ball's second step held 112 MB of segments sized by the expected items, 80 MB in
+  // later steps. Where the pass runs in slices, the expected items are fewer.
   static void forget_stale_plan(EmitterState& e, std::size_t segments)
   {
-    if (segments + e.planned / 8 < e.planned || segments > e.planned + e.planned / 8) e.planned = e.planned_total = 0;
+    if (!(segments + e.planned / 8 < e.planned || segments > e.planned + e.planned / 8)) return;
+    if (e.planned_total > 0 && segments > 0) e.fresh = (e.planned_total + e.planned_total / 4 + segments - 1) / segments;
+    e.planned = e.planned_total = 0;
   }
 
   // Segmented lock: this execution's counts plan the next one's segments.
@@ -764,6 +776,7 @@ struct Scheduler::State {
     std::swap(e.plan, e.offsets);
     e.planned = e.segments;
     e.planned_total = host_counters[state(e.stream).slot];
+    e.fresh = 0;
   }
 
   // After the stage's counters are read: whether the emitter's items outgrew its stream

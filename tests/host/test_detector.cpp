@@ -661,5 +661,9 @@ TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks
     CHECK(peaks[4] == held[4]);  // a settled step allocates nothing
     // Segments sized for four items a front pair, as they were, took 2.7 times.
     for (std::size_t peak : peaks) CHECK(double(peak) <= 2 * double(held.back()));
+    // The second step's segments, sized from what the first emitted rather than from
+    // the items a front pair is expected to emit, hold what later steps hold (10-12% more
+    // on pocl when they were not).
+    CHECK(double(peaks[1]) <= 1.05 * double(held.back()));
   }
 }
