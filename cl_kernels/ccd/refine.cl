@@ -83,14 +83,24 @@ typedef struct {
   cs_box box;
 } cs_item;
 
-/* 2 keys + 32 bytes, at most 2 reals + 32 (host: add_elementary_tests). The seed looks
- * up the query's vertices once: a round's visit of a box is a chain of dependent reads,
- * one link shorter without the face's or the edges' indices. */
+/* 2 keys + 32 bytes, at most 2 reals + 32, and with CS_KEEP_FUNCTION 37 reals more
+ * (host: add_elementary_tests). The seed looks up the query's vertices once: a round's
+ * visit of a box is a chain of dependent reads, one link shorter without the face's or
+ * the edges' indices.
+ * CS_KEEP_FUNCTION (set where the device is a CPU): the seed also makes the query's
+ * function and scale once, and rounds read them instead of making them again from the
+ * points for every box, a sixth of the refinement on pocl. A GPU would hold 148 or 296
+ * bytes more a query (75 MB on cloth-ball in single precision) for a visit whose
+ * arithmetic is not what it waits on. */
 typedef struct {
   cs_key best[2];
   uint work[3];
   uint flags;
   uint vertices[4];
+#if CS_KEEP_FUNCTION
+  cs_trilinear f;
+  real scale;
+#endif
 } cs_refine_state;
 
 /* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
@@ -243,14 +253,18 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
     }
   }
 #endif
+  real q[24];
+  cs_vertex_points(s.vertices, x0, x1, q);
+  const cs_query query = cs_points_query(q, exact_input);
+#if CS_KEEP_FUNCTION
+  s.f = cs_make_trilinear(&query, (int)pair.z);
+  s.scale = cs_query_scale(&query);
+#endif
   /* In single precision only. In double, where the search's answers are within rounding
    * of the exact time, a contact found early leaves the root box's halves to be cut
    * short by the tolerance before it: the median error of the times on the real steps
    * grew to the tolerance (armadillo-rollers 7e-11 -> 1e-5), for steps at most 8% faster. */
   if (!CS_REAL_DOUBLE) {
-    real q[24];
-    cs_vertex_points(s.vertices, x0, x1, q);
-    const cs_query query = cs_points_query(q, exact_input);
     cs_item guess = root;
     if (cs_guess_box(q, &query, (int)pair.z, tolerance, &guess.box)) {
       const uint at = cs_worklist_seed_index(counts, capacity);
@@ -288,13 +302,19 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const int given_up = 0;
 #endif
       if (!given_up) {
+#if CS_KEEP_FUNCTION
+        const cs_trilinear f = seen.f;
+        const real scale = seen.scale;
+#else
         real points[24];
         cs_vertex_points(seen.vertices, x0, x1, points);
         const cs_query q = cs_points_query(points, exact_input);
         const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
+        const real scale = cs_query_scale(&q);
+#endif
         const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
-        visit = cs_visit_box(&f, it.box, vertex_face, tolerance * cs_query_scale(&q), tolerance, separation, before,
-                             out_of_work, &slack, &limited, &t, &lo.box, &hi.box);
+        visit = cs_visit_box(&f, it.box, vertex_face, tolerance * scale, tolerance, separation, before, out_of_work,
+                             &slack, &limited, &t, &lo.box, &hi.box);
       }
       cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       /* After the visit: issued before it, this store to a word that every box of the

@@ -3,6 +3,7 @@
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/errors.hpp>
 #include <cstreams/geometry/float_bounds.hpp>
+#include <cstreams/runtime/context.hpp>
 
 #include <algorithm>
 #include <limits>
@@ -247,7 +248,7 @@ runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precisi
 }
 
 std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
-    runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, std::size_t refine_items,
+    runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, const GraphDevice& device,
     const std::function<std::size_t(std::size_t)>& sized, bool mark_limits)
 {
   using namespace runtime;
@@ -305,10 +306,15 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   // and in a scene of objects three more for the steps that report earliest times alone.
   // The round kernel is heavy in registers (255 a work-item in double on the H200): in
   // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
-  // 256 (BENCHMARKS.md).
+  // 256 (BENCHMARKS.md). On a CPU the state also keeps the query's function, 37 reals
+  // (CS_KEEP_FUNCTION in refine.cl).
   constexpr std::size_t refine_group = 64;
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
-  runtime::Worklist boxes{"cs_refine_seed", "cs_refine_round", 8 + 6 * real_bytes, 2 * real_bytes + 32, refine_items,
+  runtime::Worklist boxes{"cs_refine_seed",
+                          "cs_refine_round",
+                          8 + 6 * real_bytes,
+                          2 * real_bytes + 32 + (device.cpu ? 37 * real_bytes : 0),
+                          device.refine_items,
                           refine_group};
   const bool objects = in.object_contacts != StreamId{};
   if (objects) {
@@ -316,7 +322,8 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     boxes.extra_state_while = in.earliest_only;
   }
   auto& pass = g.pass("refine open queries",
-                      {refine, "cs_refine_finish", options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "")})
+                      {refine, "cs_refine_finish",
+                       options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") + (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "")})
                    .launch_over(open)
                    .refine(boxes)
                    .emit(vf)
@@ -506,7 +513,7 @@ struct GraphBuilder {
   }
 
   // The elementary tests of every candidate stream, each emitting its contacts.
-  void elementary_tests(std::size_t refine_items)
+  void elementary_tests(const GraphDevice& device)
   {
     TestInputs in;
     in.x0 = exact_input ? s.x0_double : s.x0;
@@ -526,7 +533,7 @@ struct GraphBuilder {
       in.object_contacts = s.object_contacts;
       in.earliest_only = s.earliest_only;
     }
-    s.contacts = add_elementary_tests(g, in, solver, refine_items, [this](std::size_t guess) { return sized(guess); });
+    s.contacts = add_elementary_tests(g, in, solver, device, [this](std::size_t guess) { return sized(guess); });
   }
 
   // The earliest time of impact per object, by an atomic minimum over the contacts.
@@ -549,6 +556,16 @@ struct GraphBuilder {
 
 }  // namespace
 
+GraphDevice graph_device(const runtime::Context& context)
+{
+  GraphDevice on;
+  on.refine_items = 8 * context.device().compute_units * context.work_group_size();
+  on.work_group_size = context.work_group_size();
+  on.cpu = context.device().kind == runtime::DeviceKind::cpu;
+  on.bounded_loops = context.loop_trip_limit() != 0;
+  return on;
+}
+
 CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
                          const GraphDevice& device)
 {
@@ -558,7 +575,7 @@ CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& optio
   b.bounds_and_refit(device.work_group_size);
   if (!layout.seeds.empty()) {
     b.broad_phase(front_size, device.bounded_loops);
-    b.elementary_tests(device.refine_items);
+    b.elementary_tests(device);
     b.earliest_toi();
   }
   return std::move(b.out);

@@ -93,11 +93,7 @@ struct Detector::State {
         ids(layout), readback(device, layout, scene, o.solver.precision)
   {
     const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
-    GraphDevice on;
-    on.refine_items = 8 * device.device().compute_units * device.work_group_size();
-    on.work_group_size = device.work_group_size();
-    on.bounded_loops = device.loop_trip_limit() != 0;
-    CcdGraph g = build_ccd_graph(layout, options, seeds.size(), on);
+    CcdGraph g = build_ccd_graph(layout, options, seeds.size(), graph_device(device));
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});

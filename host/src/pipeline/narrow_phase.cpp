@@ -66,8 +66,7 @@ struct DeviceSolver::Graph {
     real_arg(pair_kernel_args(filter, in, pairs, kind, options.precision), options.min_separation, options.precision)
         .arg(value_of(cl_uint(options.filter)))
         .arg(buffer_of(culled));
-    const std::size_t refine_items = 8 * context.device().compute_units * context.work_group_size();
-    for (const auto& c : add_elementary_tests(g, in, options, refine_items, [](std::size_t guess) { return guess; }, true))
+    for (const auto& c : add_elementary_tests(g, in, options, graph_device(context), [](std::size_t guess) { return guess; }, true))
       contacts.push_back(c.first);
     x0 = in.x0;
     x1 = in.x1;

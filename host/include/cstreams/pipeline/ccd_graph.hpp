@@ -11,6 +11,10 @@
 #include <functional>
 #include <vector>
 
+namespace cstreams::runtime {
+class Context;
+}
+
 namespace cstreams {
 
 // One object's place in the scene's streams.
@@ -100,29 +104,34 @@ runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& i
 // A length or tolerance as a kernel of this precision takes it: in float, rounded up.
 runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precision);
 
-// Adds the elementary tests of every candidate stream to a graph and returns the
-// contact streams they emit, with their kinds. The cubic solver is one pass. The
-// conservative one is a screen (the filter and the whole-domain bounds), then
-// breadth-first refinement across the device: a work list of (query, box) items whose
-// rounds launch `refine_items` work-items. `sized` gives a variable stream's first
-// capacity from a guess. With mark_limits, a contact that only a solver limit reported carries
-// its time negated (for reports that count limits).
-std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
-    runtime::StreamGraph& g, const TestInputs& inputs, const SolverOptions& solver, std::size_t refine_items,
-    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits = false);
-
-struct CcdGraph {
-  runtime::StreamGraph graph;
-  CcdStreams streams;
-};
-
 // What the graph takes from the device it runs on.
 struct GraphDevice {
   std::size_t refine_items = 1 << 14;  // work-items of the conservative solver's refinement
                                        // rounds: enough work-groups to fill the device
   std::size_t work_group_size = 256;   // the scheduler's work-group size (its launches')
+  bool cpu = false;                    // the refinement keeps each query's function in its
+                                       // state rather than making it again for each box
   bool bounded_loops = false;          // the device ends loops early: the front update stops
                                        // the run when a search ran out of loop trips (RunStopped)
+};
+
+// What the graph takes from the device of `context`.
+GraphDevice graph_device(const runtime::Context& context);
+
+// Adds the elementary tests of every candidate stream to a graph and returns the
+// contact streams they emit, with their kinds. The cubic solver is one pass. The
+// conservative one is a screen (the filter and the whole-domain bounds), then
+// breadth-first refinement across the device: a work list of (query, box) items whose
+// rounds launch the device's refine_items work-items. `sized` gives a variable stream's first
+// capacity from a guess. With mark_limits, a contact that only a solver limit reported carries
+// its time negated (for reports that count limits).
+std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
+    runtime::StreamGraph& g, const TestInputs& inputs, const SolverOptions& solver, const GraphDevice& device,
+    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits = false);
+
+struct CcdGraph {
+  runtime::StreamGraph graph;
+  CcdStreams streams;
 };
 
 // The CCD stream graph of one scene: swept bounds and refit for moving objects only,
