@@ -4,6 +4,10 @@
  * over as many work-items as it has boxes and no query holds the others up.
  * Built with CS_REAL_DOUBLE and, by the scheduler, CS_REGISTRATION.
  *
+ * A query's first boxes span only the times at which its four points may be coplanar
+ * (coplanarity.h): every contact is among them, so the rounds no longer prove, box by
+ * box, that nothing touches before the first of them.
+ *
  * Rounds are synchronous per query: round r prunes with the earliest contact of rounds
  * before r and checks the work of rounds before r, never with what round r itself
  * finds. So a query's answer depends on nothing but the query: not on the device, the
@@ -18,6 +22,7 @@
  * objects. The queries that go on run exactly as they would have, so every object's
  * earliest time is the one the full list of contacts gives (cs_not_earliest). */
 #include "conservative.h"
+#include "coplanarity.h"
 #include "cubic.h"
 #include "pairs.h"
 #include "runtime/registration.h"
@@ -227,17 +232,37 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
 {
   const uint i = get_global_id(0);
   if (i >= n) return;
-  cs_item root;
-  root.query = i;
-  root.work = 0;
-  root.box = cs_root_box();
-  list[i] = root;
   const uint4 pair = queries[i];
   cs_refine_state s;
   s.best[0] = s.best[1] = cs_key_of(2); /* no contact */
   s.work[0] = s.work[1] = s.work[2] = 0;
   s.flags = pair.z ? CS_FLAG_VERTEX_FACE : 0u;
   cs_pair_vertices(pair.xy, pair.z, faces, edges, s.vertices);
+  real q[24];
+  cs_vertex_points(s.vertices, x0, x1, q);
+  const cs_query query = cs_points_query(q, exact_input);
+  /* The query's first boxes span the times at which its points may be coplanar (the
+   * whole step with a minimum separation); a query that is never coplanar gets one box
+   * after the step, which round 0 drops. */
+  real lo[CS_COPLANAR_RUNS], hi[CS_COPLANAR_RUNS];
+  int runs = 1;
+  lo[0] = 0;
+  hi[0] = 1;
+  if (separation == 0) runs = cs_coplanar_times(&query, lo, hi);
+  cs_item root;
+  root.query = i;
+  root.work = 0;
+  root.box = cs_root_box();
+  root.box.t0 = runs ? lo[0] : (real)2;
+  root.box.t1 = runs ? hi[0] : (real)2;
+  list[i] = root;
+  for (int k = 1; k < runs; ++k) {
+    cs_item more = root;
+    more.box.t0 = lo[k];
+    more.box.t1 = hi[k];
+    const uint at = cs_worklist_seed_index(counts, capacity);
+    if (at < capacity) list[at] = more;
+  }
 #if CS_EARLIEST_ACROSS
   /* Before any round, and again when the list overflowed and the search starts over:
    * contacts found by a cut-short search must not give up queries. Every store is the
@@ -245,7 +270,7 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   if (earliest_only) {
     __global uint* first = cs_first_starts(state, n, i);
     first[0] = first[1] = CS_NO_TIME;
-    first[2] = 0; /* round 0's: the root box's */
+    first[2] = runs ? cs_float_key_down(lo[0]) : CS_NO_TIME; /* round 0's: the first box's */
     const uint2 o = cs_query_objects(&s, vertex_object);
     for (int k = 0; k < 2; ++k) {
       const uint object = k ? o.y : o.x;
@@ -254,9 +279,6 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
     }
   }
 #endif
-  real q[24];
-  cs_vertex_points(s.vertices, x0, x1, q);
-  const cs_query query = cs_points_query(q, exact_input);
 #if CS_KEEP_FUNCTION
   s.f = cs_make_trilinear(&query, (int)pair.z);
   s.scale = cs_query_scale(&query);
@@ -264,12 +286,17 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   /* In single precision only. In double, where the search's answers are within rounding
    * of the exact time, a contact found early leaves the root box's halves to be cut
    * short by the tolerance before it: the median error of the times on the real steps
-   * grew to the tolerance (armadillo-rollers 7e-11 -> 1e-5), for steps at most 8% faster. */
-  if (!CS_REAL_DOUBLE) {
+   * grew to the tolerance (armadillo-rollers 7e-11 -> 1e-5), for steps at most 8% faster.
+   * Kept within the times the first boxes span. */
+  if (!CS_REAL_DOUBLE && runs) {
     cs_item guess = root;
     if (cs_guess_box(q, &query, (int)pair.z, tolerance, &guess.box)) {
-      const uint at = cs_worklist_seed_index(counts, capacity);
-      if (at < capacity) list[at] = guess;
+      guess.box.t0 = fmax(guess.box.t0, lo[0]);
+      guess.box.t1 = fmin(guess.box.t1, hi[runs - 1]);
+      if (guess.box.t0 < guess.box.t1) {
+        const uint at = cs_worklist_seed_index(counts, capacity);
+        if (at < capacity) list[at] = guess;
+      }
     }
   }
   state[i] = s;
@@ -302,7 +329,8 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
 #else
       const int given_up = 0;
 #endif
-      if (!given_up) {
+      /* Not a box after the step: the seed's of a query that is never coplanar. */
+      if (!given_up && it.box.t0 <= 1) {
 #if CS_KEEP_FUNCTION
         const cs_trilinear f = seen.f;
         const real scale = seen.scale;
