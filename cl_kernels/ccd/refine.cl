@@ -4,9 +4,9 @@
  * over as many work-items as it has boxes and no query holds the others up.
  * Built with CS_REAL_DOUBLE and, by the scheduler, CS_REGISTRATION.
  *
- * A query's first boxes span only the times at which its four points may be coplanar
- * (coplanarity.h): every contact is among them, so the rounds no longer prove, box by
- * box, that nothing touches before the first of them.
+ * Without a minimum separation, a query's first boxes span only the times at which its
+ * four points may be coplanar (coplanarity.h): every contact is among them, so the
+ * rounds no longer prove, box by box, that nothing touches before the first of them.
  *
  * Rounds are synchronous per query: round r prunes with the earliest contact of rounds
  * before r and checks the work of rounds before r, never with what round r itself
