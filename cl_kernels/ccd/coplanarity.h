@@ -4,15 +4,16 @@
  *
  * A vertex touching a face, or an edge touching an edge, puts the four points of the
  * query in one plane: g(t) = ((x1 - x0) x (x2 - x0)) . (x3 - x0) vanishes at every time
- * of contact. With the points moving linearly, g is a cubic in t. Its coefficients are
- * computed once in interval arithmetic rounded outward, so they hold for the exact
- * inputs, and kept as midpoints c[k] and the sum of their radii. Over times [t0, t1]
+ * of contact. With the points moving linearly, g is a cubic in t (the non-penetration
+ * filter's, filter.h). Its coefficients are computed once in interval arithmetic
+ * rounded outward, so they hold for the exact inputs, and kept as midpoints c[k] and
+ * the sum of their radii. Over times [t0, t1]
  * around their middle m, at most h away from it, the midpoint cubic p moves from p(m)
  * by at most |p'(m)| h + |p''(m)| h^2 / 2 + |c[3]| h^3 (its Taylor series ends there),
  * and g stays within the radii of p: where |p(m)| is larger than all of that, g keeps
  * its sign and no time of [t0, t1] is a contact. This only holds without a minimum
  * separation: points closer than it count as a contact without being coplanar. */
-#include "trilinear.h"
+#include "filter.h"
 
 /* How far the search narrows the times, and how many intervals it tries before it
  * keeps the rest of the step whole. In single precision the cubic solver's guess
@@ -33,38 +34,11 @@ typedef struct {
   real radius; /* at least the sum of the coefficients' radii */
 } cs_coplanarity;
 
-inline void cs_icross(const cs_interval a[3], const cs_interval b[3], cs_interval out[3])
+/* g's coefficients (filter.h) as midpoints and the sum of their radii. */
+inline cs_coplanarity cs_coplanarity_of(const cs_query* q, const int vertex_face)
 {
-  out[0] = cs_isub(cs_imul(a[1], b[2]), cs_imul(a[2], b[1]));
-  out[1] = cs_isub(cs_imul(a[2], b[0]), cs_imul(a[0], b[2]));
-  out[2] = cs_isub(cs_imul(a[0], b[1]), cs_imul(a[1], b[0]));
-}
-
-inline cs_interval cs_idot(const cs_interval a[3], const cs_interval b[3])
-{
-  return cs_iadd(cs_iadd(cs_imul(a[0], b[0]), cs_imul(a[1], b[1])), cs_imul(a[2], b[2]));
-}
-
-/* With e_j(t) = A_j + t D_j the differences from point 0, (e_0 x e_1) . e_2 expanded. */
-inline cs_coplanarity cs_coplanarity_of(const cs_query* q)
-{
-  cs_interval a[3][3], d[3][3];
-  for (int j = 0; j < 3; ++j)
-    for (int k = 0; k < 3; ++k) {
-      a[j][k] = cs_isub(q->x[j + 1][k], q->x[0][k]);
-      d[j][k] = cs_isub(cs_isub(q->x[j + 5][k], q->x[4][k]), a[j][k]);
-    }
-  cs_interval aa[3], ad[3], da[3], dd[3], mixed[3];
-  cs_icross(a[0], a[1], aa);
-  cs_icross(a[0], d[1], ad);
-  cs_icross(d[0], a[1], da);
-  cs_icross(d[0], d[1], dd);
-  for (int k = 0; k < 3; ++k) mixed[k] = cs_iadd(ad[k], da[k]);
   cs_interval c[4];
-  c[0] = cs_idot(aa, a[2]);
-  c[1] = cs_iadd(cs_idot(aa, d[2]), cs_idot(mixed, a[2]));
-  c[2] = cs_iadd(cs_idot(mixed, d[2]), cs_idot(dd, a[2]));
-  c[3] = cs_idot(dd, d[2]);
+  cs_coplanarity_cubic(q, vertex_face, c);
   cs_coplanarity g;
   g.radius = 0;
   for (int k = 0; k < 4; ++k) {
@@ -94,9 +68,10 @@ inline int cs_never_coplanar(const cs_coplanarity* g, const real t0, const real 
  * earliest half first, dropping what keeps g's sign; after CS_COPLANAR_TRIES intervals
  * the rest of the step is kept whole, and runs beyond the last but one merge into the
  * last. Interval (level, i) is [i 2^-level, (i + 1) 2^-level], exact in any precision. */
-inline int cs_coplanar_times(const cs_query* q, real lo[CS_COPLANAR_RUNS], real hi[CS_COPLANAR_RUNS])
+inline int cs_coplanar_times(const cs_query* q, const int vertex_face, real lo[CS_COPLANAR_RUNS],
+                             real hi[CS_COPLANAR_RUNS])
 {
-  const cs_coplanarity g = cs_coplanarity_of(q);
+  const cs_coplanarity g = cs_coplanarity_of(q, vertex_face);
   uint stack[CS_COPLANAR_DEPTH + 1]; /* level in the top 5 bits, index below */
   int top = 0, runs = 0;
   stack[0] = 0;

@@ -31,8 +31,9 @@ inline cs_interval cs_dot(const cs_interval a[3], const cs_interval b[3])
   return cs_iadd(cs_iadd(cs_imul(a[0], b[0]), cs_imul(a[1], b[1])), cs_imul(a[2], b[2]));
 }
 
-/* Returns 1 when the pair certainly has no coplanarity in [0, 1]. */
-inline int cs_non_penetration_filter(const cs_query* q, const int vertex_face)
+/* f's coefficients, k[0] + k[1] t + k[2] t^2 + k[3] t^3, each an interval that holds
+ * for the exact inputs. */
+inline void cs_coplanarity_cubic(const cs_query* q, const int vertex_face, cs_interval k[4])
 {
   /* A = x1 - x0, B = x2 - x0, C = x3 - x0, each A0 + t Av. */
   cs_interval A0[3], Av[3], B0[3], Bv[3], C0[3], Cv[3];
@@ -49,18 +50,24 @@ inline int cs_non_penetration_filter(const cs_query* q, const int vertex_face)
   cs_cross(A0, B0, n0);
   cs_cross(A0, Bv, n1a);
   cs_cross(Av, B0, n1b);
-  for (int k = 0; k < 3; ++k) n1[k] = cs_iadd(n1a[k], n1b[k]);
+  for (int j = 0; j < 3; ++j) n1[j] = cs_iadd(n1a[j], n1b[j]);
   cs_cross(Av, Bv, n2);
-  /* f = k0 + k1 t + k2 t^2 + k3 t^3 */
-  const cs_interval k0 = cs_dot(n0, C0);
-  const cs_interval k1 = cs_iadd(cs_dot(n0, Cv), cs_dot(n1, C0));
-  const cs_interval k2 = cs_iadd(cs_dot(n1, Cv), cs_dot(n2, C0));
-  const cs_interval k3 = cs_dot(n2, Cv);
+  k[0] = cs_dot(n0, C0);
+  k[1] = cs_iadd(cs_dot(n0, Cv), cs_dot(n1, C0));
+  k[2] = cs_iadd(cs_dot(n1, Cv), cs_dot(n2, C0));
+  k[3] = cs_dot(n2, Cv);
+}
+
+/* Returns 1 when the pair certainly has no coplanarity in [0, 1]. */
+inline int cs_non_penetration_filter(const cs_query* q, const int vertex_face)
+{
+  cs_interval k[4];
+  cs_coplanarity_cubic(q, vertex_face, k);
   /* Bernstein coefficients times 3 (same signs): 3k0, 3k0 + k1, 3k0 + 2k1 + k2, 3(k0+k1+k2+k3). */
-  const cs_interval b0 = k0;
-  const cs_interval b1 = cs_iadd(cs_iscale(k0, 3), k1);
-  const cs_interval b2 = cs_iadd(cs_iadd(cs_iscale(k0, 3), cs_iscale(k1, 2)), k2);
-  const cs_interval b3 = cs_iadd(cs_iadd(k0, k1), cs_iadd(k2, k3));
+  const cs_interval b0 = k[0];
+  const cs_interval b1 = cs_iadd(cs_iscale(k[0], 3), k[1]);
+  const cs_interval b2 = cs_iadd(cs_iadd(cs_iscale(k[0], 3), cs_iscale(k[1], 2)), k[2]);
+  const cs_interval b3 = cs_iadd(cs_iadd(k[0], k[1]), cs_iadd(k[2], k[3]));
   const int positive = b0.lo > 0 && b1.lo > 0 && b2.lo > 0 && b3.lo > 0;
   const int negative = b0.hi < 0 && b1.hi < 0 && b2.hi < 0 && b3.hi < 0;
   return positive || negative;

@@ -248,7 +248,7 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   int runs = 1;
   lo[0] = 0;
   hi[0] = 1;
-  if (separation == 0) runs = cs_coplanar_times(&query, lo, hi);
+  if (separation == 0) runs = cs_coplanar_times(&query, (int)pair.z, lo, hi);
   cs_item root;
   root.query = i;
   root.work = 0;
