@@ -766,7 +766,8 @@ struct Scheduler::State {
   static void forget_stale_plan(EmitterState& e, std::size_t segments)
   {
     if (!(segments + e.planned / 8 < e.planned || segments > e.planned + e.planned / 8)) return;
-    if (e.planned_total > 0 && segments > 0) e.fresh = (e.planned_total + e.planned_total / 4 + segments - 1) / segments;
+    const std::size_t total = e.planned_total + e.planned_total / 4;
+    if (total > 0 && segments > 0) e.fresh = (total + segments - 1) / segments;
     e.planned = e.planned_total = 0;
   }
 

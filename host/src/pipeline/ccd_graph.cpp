@@ -321,9 +321,9 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     boxes.extra_state_bytes = 12;
     boxes.extra_state_while = in.earliest_only;
   }
-  auto& pass = g.pass("refine open queries",
-                      {refine, "cs_refine_finish",
-                       options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") + (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "")})
+  const std::string refine_options =
+      options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") + (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "");
+  auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", refine_options})
                    .launch_over(open)
                    .refine(boxes)
                    .emit(vf)

@@ -66,7 +66,8 @@ struct DeviceSolver::Graph {
     real_arg(pair_kernel_args(filter, in, pairs, kind, options.precision), options.min_separation, options.precision)
         .arg(value_of(cl_uint(options.filter)))
         .arg(buffer_of(culled));
-    for (const auto& c : add_elementary_tests(g, in, options, graph_device(context), [](std::size_t guess) { return guess; }, true))
+    const auto as_guessed = [](std::size_t guess) { return guess; };
+    for (const auto& c : add_elementary_tests(g, in, options, graph_device(context), as_guessed, true))
       contacts.push_back(c.first);
     x0 = in.x0;
     x1 = in.x1;

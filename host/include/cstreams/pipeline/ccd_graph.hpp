@@ -109,8 +109,8 @@ struct GraphDevice {
   std::size_t refine_items = 1 << 14;  // work-items of the conservative solver's refinement
                                        // rounds: enough work-groups to fill the device
   std::size_t work_group_size = 256;   // the scheduler's work-group size (its launches')
-  bool cpu = false;                    // the refinement keeps each query's function in its
-                                       // state rather than making it again for each box
+  bool cpu = false;                    // a CPU: the refinement keeps each query's function in
+                                       // its state rather than making it again for each box
   bool bounded_loops = false;          // the device ends loops early: the front update stops
                                        // the run when a search ran out of loop trips (RunStopped)
 };
