@@ -329,7 +329,11 @@ TEST_CASE("the unit-test queries: conservative misses none, cubic is measured", 
 TEST_CASE("in double the conservative solver's times on real steps are within 1e-8 of the exact ones",
           "[narrow][quick]")
 {
-  if (!cstreams::test::device().device().fp64) return;
+  const auto& device = cstreams::test::device().device();
+  if (!device.fp64) return;
+  // Without 64-bit atomics a query's earliest time is kept rounded down to float
+  // (refine.cl), one step of 2^-24 below 1.
+  const double within = 1e-8 + (device.int64_atomics ? 0 : 0x1p-23);
   DeviceSolver solver(cstreams::test::device(), conservative(Precision::double_));
   const std::pair<cstreams::test::RealStep, ContactKind> sets[] = {
       {cstreams::test::real_steps[0], ContactKind::vertex_face},
@@ -351,7 +355,7 @@ TEST_CASE("in double the conservative solver's times on real steps are within 1e
                 << " timed contacts, earliest by at most " << double(worst));
     CHECK(timed > 0);
     CHECK(worst >= 0);
-    CHECK(worst < 1e-8);
+    CHECK(worst < within);
   }
 }
 
