@@ -7,12 +7,12 @@
  * of contact. With the points moving linearly, g is a cubic in t (the non-penetration
  * filter's, filter.h). Its coefficients are computed once in interval arithmetic
  * rounded outward, so they hold for the exact inputs, and kept as midpoints c[k] and
- * the sum of their radii. Over times [t0, t1]
- * around their middle m, at most h away from it, the midpoint cubic p moves from p(m)
- * by at most |p'(m)| h + |p''(m)| h^2 / 2 + |c[3]| h^3 (its Taylor series ends there),
- * and g stays within the radii of p: where |p(m)| is larger than all of that, g keeps
- * its sign and no time of [t0, t1] is a contact. This only holds without a minimum
- * separation: points closer than it count as a contact without being coplanar. */
+ * the sum of their radii. Over times [t0, t1] around their middle m, at most h away
+ * from it, the midpoint cubic p moves from p(m) by at most
+ * |p'(m)| h + |p''(m)| h^2 / 2 + |c[3]| h^3 (its Taylor series ends there), and g stays
+ * within the radii of p: where |p(m)| is larger than all of that, g keeps its sign and
+ * no time of [t0, t1] is a contact. This only holds without a minimum separation:
+ * points closer than it count as a contact without being coplanar. */
 #include "filter.h"
 
 /* How far the search narrows the times, and how many intervals it tries before it
