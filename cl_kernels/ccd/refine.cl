@@ -42,6 +42,21 @@
 #define CS_MOST_ROUNDS 1024u
 #define CS_MOST_BOXES 4096u
 
+/* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
+inline uint cs_float_key_down(const real t)
+{
+  float f = (float)t;
+  if ((real)f > t) f = nextafter(f, 0.0f);
+  return as_uint(f);
+}
+
+inline uint cs_float_key_up(const real t)
+{
+  float f = (float)t;
+  if ((real)f < t) f = nextafter(f, 2.0f);
+  return as_uint(f);
+}
+
 /* Each query's earliest contact so far is a key updated by atomic minimum. Times are
  * never negative, so their bits order as they do. In double precision the key is the
  * double where the device has 64-bit atomics; elsewhere (an HD 5870) it is the time
@@ -65,16 +80,7 @@ inline void cs_key_lower(volatile __global cs_key* p, cs_key seen, const cs_key 
 }
 #else
 typedef uint cs_key;
-#if CS_REAL_DOUBLE
-inline cs_key cs_key_of(const real t)
-{
-  float f = (float)t;
-  if ((real)f > t) f = nextafter(f, 0.0f);
-  return as_uint(f);
-}
-#else
-inline cs_key cs_key_of(const real t) { return as_uint(t); }
-#endif
+inline cs_key cs_key_of(const real t) { return cs_float_key_down(t); }
 inline real cs_time_of(const cs_key k) { return (real)as_float(k); }
 inline void cs_key_lower(volatile __global cs_key* p, const cs_key seen, const cs_key k)
 {
@@ -108,21 +114,6 @@ typedef struct {
   real scale;
 #endif
 } cs_refine_state;
-
-/* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
-inline uint cs_float_key_down(const real t)
-{
-  float f = (float)t;
-  if ((real)f > t) f = nextafter(f, 0.0f);
-  return as_uint(f);
-}
-
-inline uint cs_float_key_up(const real t)
-{
-  float f = (float)t;
-  if ((real)f < t) f = nextafter(f, 2.0f);
-  return as_uint(f);
-}
 
 #define CS_NO_TIME 0x40000000u /* 2.0f: later than any time of a step */
 
