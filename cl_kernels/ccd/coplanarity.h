@@ -36,11 +36,10 @@ typedef struct {
   real radius; /* at least the sum of the coefficients' radii */
 } cs_coplanarity;
 
-/* g's coefficients (filter.h) as midpoints and the sum of their radii. */
-inline cs_coplanarity cs_coplanarity_of(const cs_query* q, const int vertex_face)
+/* g's coefficients (cs_coplanarity_cubic, filter.h) as midpoints and the sum of their
+ * radii. */
+inline cs_coplanarity cs_coplanarity_of(const cs_interval c[4])
 {
-  cs_interval c[4];
-  cs_coplanarity_cubic(q, vertex_face, c);
   cs_coplanarity g;
   g.radius = 0;
   for (int k = 0; k < 4; ++k) {
@@ -99,10 +98,9 @@ inline void cs_add_run(real lo[CS_COPLANAR_RUNS], real hi[CS_COPLANAR_RUNS], int
  * eighths, the rest of the step is kept whole. The eighths still to visit at each
  * level are bits of one mask and the way down digits of one index, so the search holds
  * no stack in memory. */
-inline int cs_coplanar_times(const cs_query* q, const int vertex_face, real lo[CS_COPLANAR_RUNS],
-                             real hi[CS_COPLANAR_RUNS])
+inline int cs_coplanar_times(const cs_interval c[4], real lo[CS_COPLANAR_RUNS], real hi[CS_COPLANAR_RUNS])
 {
-  const cs_coplanarity g = cs_coplanarity_of(q, vertex_face);
+  const cs_coplanarity g = cs_coplanarity_of(c);
   int runs = 0;
   if (cs_never_coplanar(&g, 0, 1)) return 0;
   ulong pending = cs_coplanar_eighths(&g, 0, 0); /* 8 bits a level: the eighths left there */

@@ -58,11 +58,9 @@ inline void cs_coplanarity_cubic(const cs_query* q, const int vertex_face, cs_in
   k[3] = cs_dot(n2, Cv);
 }
 
-/* Returns 1 when the pair certainly has no coplanarity in [0, 1]. */
-inline int cs_non_penetration_filter(const cs_query* q, const int vertex_face)
+/* Returns 1 when the cubic with coefficients k certainly has no root in [0, 1]. */
+inline int cs_cubic_keeps_sign(const cs_interval k[4])
 {
-  cs_interval k[4];
-  cs_coplanarity_cubic(q, vertex_face, k);
   /* Bernstein coefficients times 3 (same signs): 3k0, 3k0 + k1, 3k0 + 2k1 + k2, 3(k0+k1+k2+k3). */
   const cs_interval b0 = k[0];
   const cs_interval b1 = cs_iadd(cs_iscale(k[0], 3), k[1]);
@@ -71,6 +69,14 @@ inline int cs_non_penetration_filter(const cs_query* q, const int vertex_face)
   const int positive = b0.lo > 0 && b1.lo > 0 && b2.lo > 0 && b3.lo > 0;
   const int negative = b0.hi < 0 && b1.hi < 0 && b2.hi < 0 && b3.hi < 0;
   return positive || negative;
+}
+
+/* Returns 1 when the pair certainly has no coplanarity in [0, 1]. */
+inline int cs_non_penetration_filter(const cs_query* q, const int vertex_face)
+{
+  cs_interval k[4];
+  cs_coplanarity_cubic(q, vertex_face, k);
+  return cs_cubic_keeps_sign(k);
 }
 
 #endif

@@ -77,24 +77,6 @@ __kernel void cs_screen_pairs(CS_FOUR_STREAMS(uint2), __global const real* x0, _
   CS_EMITTER_END(unresolved);
 }
 
-/* The same screen over pairs another screen left open, (a, b, vertex_face, 0) as
- * cs_screen_pairs emits them: in double precision, the float screen (inputs rounded
- * outward, so it settles only what is certain) goes first and settles nine pairs in
- * ten at float's cost; this one screens the rest in double. */
-__kernel void cs_screen_open_pairs(__global const uint4* open, const uint n, __global const real* x0,
-                                   __global const real* x1, __global const uint* faces, __global const uint* edges,
-                                   const uint exact_input, const real separation, const uint use_filter,
-                                   CS_EMITTER_PARAMS(uint4, unresolved))
-{
-  CS_EMITTER_BEGIN(unresolved);
-  const uint i = get_global_id(0);
-  if (i < n) {
-    const uint4 q = open[i];
-    if (cs_screen_open(q.xy, q.z, x0, x1, faces, edges, exact_input, separation, use_filter)) CS_EMIT(unresolved, q);
-  }
-  CS_EMITTER_END(unresolved);
-}
-
 /* Which pairs the filter alone settles, for reports of how the tests decide (the
  * kernels above apply the filter themselves). */
 __kernel void cs_filter_flags(__global const uint2* pairs, const uint n, const uint vertex_face,

@@ -121,7 +121,7 @@ typedef struct {
 #define CS_REFINE_PARAMS                                                                                         \
   __global const uint4 *queries, const uint n, __global const real *x0, __global const real *x1,               \
       __global const uint *faces, __global const uint *edges, const uint exact_input, const real tolerance,     \
-      const real separation, const uint max_iterations CS_EARLIEST_PARAMS
+      const real separation, const uint max_iterations, const uint use_filter CS_EARLIEST_PARAMS
 
 /* Built with CS_EARLIEST_ACROSS (a scene of objects): whether this step reports only
  * each object's earliest time, every vertex's object, and two words per object: the
@@ -234,12 +234,18 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   const cs_query query = cs_points_query(q, exact_input);
   /* The query's first boxes span the times at which its points may be coplanar (the
    * whole step with a minimum separation); a query that is never coplanar gets one box
-   * after the step, which round 0 drops. */
+   * after the step, which round 0 drops. use_filter: the screen ran in float, and the
+   * non-penetration filter runs here in the refinement's precision (ccd_graph.cpp), on
+   * the same coefficients. */
   real lo[CS_COPLANAR_RUNS], hi[CS_COPLANAR_RUNS];
   int runs = 1;
   lo[0] = 0;
   hi[0] = 1;
-  if (separation == 0) runs = cs_coplanar_times(&query, (int)pair.z, lo, hi);
+  if (separation == 0) {
+    cs_interval c[4];
+    cs_coplanarity_cubic(&query, (int)pair.z, c);
+    runs = use_filter && cs_cubic_keeps_sign(c) ? 0 : cs_coplanar_times(c, lo, hi);
+  }
   cs_item root;
   root.query = i;
   root.work = 0;

@@ -203,7 +203,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     CHECK(make_layout(scene, 0).seeds.empty());
     CHECK(!contains(names(graph_of(scene).passes()), "front update"));
   }
-  SECTION("front mode none keeps no front; double precision adds exact positions and a screen in float first")
+  SECTION("front mode none keeps no front; double precision adds exact positions and screens in float")
   {
     SceneDescription scene;
     scene.add(ball("cloth", {0, 0, 0}, ObjectKind::deformable, true));
@@ -213,13 +213,17 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     CHECK(contains(names(g.passes()), "search from seeds"));
     CHECK(!contains(names(g.streams()), "next front"));
     CHECK(contains(names(g.streams()), "x0 double"));
+    // The refinement takes what the float screen leaves open, with no screen in double
+    // between them.
+    CHECK(!contains(names(g.passes()), "test candidates"));
     const auto screen = std::find_if(g.passes().begin(), g.passes().end(),
-                                     [](const auto& p) { return p.name == "test candidates"; });
+                                     [](const auto& p) { return p.name == "test candidates in float"; });
     REQUIRE(screen != g.passes().end());
-    const auto inputs = names_of(g, runtime::pass_inputs(*screen));
-    CHECK(contains(inputs, "open queries in float"));
-    CHECK(!contains(inputs, "ee candidates"));
-    CHECK(contains(names(g.passes()), "test candidates in float"));
+    CHECK(contains(names_of(g, runtime::pass_inputs(*screen)), "ee candidates"));
+    const auto refine = std::find_if(g.passes().begin(), g.passes().end(),
+                                     [](const auto& p) { return p.name == "refine open queries"; });
+    REQUIRE(refine != g.passes().end());
+    CHECK(contains(names_of(g, runtime::pass_inputs(*refine)), "open queries"));
   }
 }
 
