@@ -67,8 +67,8 @@ inline int cs_never_coplanar(const cs_coplanarity* g, const real t0, const real 
 /* Which eighths of interval `index` of level `level` ([index 8^-level, (index + 1)
  * 8^-level], exact in any precision) g may vanish on: bit k for the k-th. The eight
  * tests are independent of one another, so they run side by side where a halving
- * search would wait on each in turn (n-body's 1.19M queries: 0.3 ms of 4.6 in double
- * for halving to 2^-15). */
+ * search waits on each in turn, and in as long a search they leave narrower runs
+ * (cloth-ball in double: 6 rounds of refinement after them, 18 after halving). */
 inline uint cs_coplanar_eighths(const cs_coplanarity* g, const int level, const uint index)
 {
   const real size = ldexp((real)1, -3 * (level + 1));
