@@ -271,10 +271,11 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     return contacts;
   }
   // The conservative solver refines what its screen leaves open as one work list, so
-  // that its rounds are paid once a step. In double the screen runs in float (inputs rounded outward, so that it settles only
-  // what is certain), at float's cost, and the refinement's seed and first round do in
-  // double what a second screen would: on n-body a screen in double after the float
-  // one settled 91 of the 1.19M pairs that the float one left open, for 0.42 ms.
+  // that its rounds are paid once a step. In double the screen runs in float (inputs
+  // rounded outward, so that it settles only what is certain), at float's cost, and the
+  // refinement's seed and first round do in double what a second screen would: on
+  // n-body a screen in double after the float one settled 91 of the 1.19M pairs that
+  // the float one left open, for 0.42 ms.
   const StreamId open = g.variable("open queries", 16, sized(1024));
   const bool in_float = solver.precision == Precision::double_ && in.x0_float != StreamId{};
   SolverOptions float_solver = solver;
