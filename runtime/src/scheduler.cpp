@@ -235,6 +235,22 @@ struct Scheduler::State {
     with_memory([&] { e.items = Buffer(context, std::max<std::size_t>(bytes, 1), "registration segments"); });
   }
 
+  std::vector<Buffer> borrow_idle_segments(const std::vector<std::size_t>& sizes) const
+  {
+    const std::size_t align = std::max<std::size_t>(context.device().base_address_align, 1);
+    std::vector<std::size_t> offsets;
+    std::size_t end = 0;
+    for (const std::size_t bytes : sizes) {
+      offsets.push_back(end);
+      end = round_up(end + std::max<std::size_t>(bytes, 1), align);
+    }
+    const auto fits = smallest_holding(idle_segments, end, [](const Buffer& b) { return b.bytes(); });
+    std::vector<Buffer> slices;
+    if (sizes.empty() || fits == idle_segments.end()) return slices;
+    for (std::size_t k = 0; k < sizes.size(); ++k) slices.push_back(fits->slice(offsets[k], std::max<std::size_t>(sizes[k], 1)));
+    return slices;
+  }
+
   void give_back_segments(EmitterState& e)
   {
     if (e.items) idle_segments.push_back(std::move(e.items));
@@ -1326,6 +1342,10 @@ Scheduler::~Scheduler() = default;
 
 void Scheduler::run() { state_->run(); }
 bool Scheduler::release_idle_scratch() { return state_->release_idle_scratch(); }
+std::vector<Buffer> Scheduler::borrow_idle_segments(const std::vector<std::size_t>& sizes) const
+{
+  return state_->borrow_idle_segments(sizes);
+}
 
 void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
 {

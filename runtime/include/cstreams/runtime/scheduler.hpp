@@ -91,6 +91,11 @@ public:
   // planned as before) and returns whether any memory went back: room for device work
   // outside the graph that runs short of memory.
   bool release_idle_scratch();
+  // Slices of one idle registration-segment buffer, one of each size (at the device's
+  // base-address alignment), or none where no idle buffer holds them all: scratch for
+  // device work between runs, which would otherwise hold memory of its own through the
+  // runs. The next run writes over them: drop them before it.
+  std::vector<Buffer> borrow_idle_segments(const std::vector<std::size_t>& sizes) const;
 
   // Host transfers. Uploading to a fixed stream resizes it to `count` items;
   // uploading to a variable stream sets its count (growing it if needed).
