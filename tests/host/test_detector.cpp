@@ -669,7 +669,7 @@ TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks
                            << peaks[2]);
     CHECK(held[4] == held[3]);
     CHECK(peaks[4] == held[4]);  // a settled step allocates nothing
-    // The contacts' records, sort and layout for the host take idle segments between
+    // The contacts' records, sort and layout for the host take idle scratch between
     // runs, rather than memory that the next step's front update runs beside.
     const auto& passes = detector.stats().run.passes;
     const auto readback = std::find_if(passes.begin(), passes.end(),

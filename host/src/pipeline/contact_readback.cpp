@@ -49,7 +49,7 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
                     contact_bytes = n * sizeof(Contact);
   // Held from one step to the next, this scratch set the peak of the step after: its
   // front update ran beside it (cloth-ball: 11.9 MB).
-  const std::vector<runtime::Buffer> lent = scheduler.borrow_idle_segments({record_bytes, sort_bytes, contact_bytes});
+  const std::vector<runtime::Buffer> lent = scheduler.borrow_idle_scratch({record_bytes, sort_bytes, contact_bytes});
   if (lent.empty()) {
     runtime::allocate_making_room(
         [&] {
