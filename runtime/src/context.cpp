@@ -244,12 +244,15 @@ Buffer Buffer::slice(std::size_t offset, std::size_t bytes) const
   if (!allocation_ || bytes == 0 || offset > allocation_->bytes || bytes > allocation_->bytes - offset)
     throw Error("cannot slice bytes [" + std::to_string(offset) + ", " + std::to_string(offset + bytes) +
                 ") of a buffer of " + std::to_string(this->bytes()));
-  const cl_buffer_region region{offset, bytes};
+  const auto& whole = allocation_->whole ? allocation_->whole : allocation_;
+  const cl_buffer_region region{allocation_->offset + offset, bytes};
   cl_int status = CL_SUCCESS;
-  Handle<cl_mem> mem(clCreateSubBuffer(get(), CL_MEM_READ_WRITE, CL_BUFFER_CREATE_TYPE_REGION, &region, &status));
-  check(status, "clCreateSubBuffer", "bytes " + std::to_string(offset) + " to " + std::to_string(offset + bytes));
+  Handle<cl_mem> mem(
+      clCreateSubBuffer(whole->mem.get(), CL_MEM_READ_WRITE, CL_BUFFER_CREATE_TYPE_REGION, &region, &status));
+  check(status, "clCreateSubBuffer",
+        "bytes " + std::to_string(region.origin) + " to " + std::to_string(region.origin + bytes));
   Buffer view;
-  view.allocation_ = std::make_shared<const Allocation>(std::move(mem), bytes, allocation_);
+  view.allocation_ = std::make_shared<const Allocation>(std::move(mem), bytes, whole, region.origin);
   return view;
 }
 

@@ -122,16 +122,28 @@ Sorter::Sorter(Context& context, std::size_t words)
 {
 }
 
+// Runs that fit one block sort in local memory and merge nothing.
+std::size_t Sorter::scratch_bytes_for(std::size_t n) const { return n >= 2 && block_ < n ? n * words_ * sizeof(cl_uint) : 0; }
+
 void Sorter::reserve(std::size_t n)
 {
-  // Runs that fit one block sort in local memory and merge nothing.
-  if (n >= 2 && block_ < n) ensure_capacity(context_, scratch_, n * words_ * sizeof(cl_uint), "sort scratch");
+  if (const std::size_t bytes = scratch_bytes_for(n)) ensure_capacity(context_, scratch_, bytes, "sort scratch");
 }
 
 const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timeline, const char* label)
 {
+  reserve(n);
+  return sort(records, scratch_, n, timeline, label);
+}
+
+const Buffer& Sorter::sort(const Buffer& records, const Buffer& scratch, std::size_t n, Timeline* timeline,
+                           const char* label)
+{
   if (n >= (std::size_t(1) << 31))
     throw Error(std::string(label) + ": " + std::to_string(n) + " records, the sort takes fewer than 2^31");
+  if (scratch.bytes() < scratch_bytes_for(n))
+    throw Error(std::string(label) + ": " + std::to_string(scratch.bytes()) + " bytes of scratch for " +
+                std::to_string(n) + " records, which take " + std::to_string(scratch_bytes_for(n)));
   if (n < 2) return records;
   const std::size_t wg = context_.work_group_size();
   const std::size_t groups = (n + block_ - 1) / block_;
@@ -139,9 +151,8 @@ const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timel
   blocks_.set_local(3, block_ * words_ * sizeof(cl_uint));
   context_.launch(blocks_, groups * wg, wg, timeline, label);
   if (block_ >= n) return records;
-  reserve(n);
   const Buffer* in = &records;
-  const Buffer* out = &scratch_;
+  const Buffer* out = &scratch;
   for (std::size_t width = block_; width < n; width *= 2) {
     merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(block_));
     merge_.set_local(5, block_ * words_ * sizeof(cl_uint));

@@ -3,6 +3,8 @@
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
+#include "step_arena.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -32,17 +34,23 @@ struct StreamState {
   std::size_t earlier = 0;
   std::size_t run_items = 0;     // over the last run, every slice's
   bool partial = false;          // holds the last slice's items only (not gathered)
-  std::size_t released = 0;      // the capacity memory pressure took before its producer ran
+  std::size_t released = 0;      // the capacity memory pressure or a new run took before its producer ran
+  // Emitted anew each run (not handed over, not gathered): within a run its buffer comes
+  // from the step arena, and a new run gives it back.
+  bool transient = false;
+  std::size_t arena_at = StepArena::none;
 };
 
 struct EmitterState {
   StreamId stream;
   double expected = 0;   // items a work-item, before a run has planned the segments (PassSpec::expected_items)
   StreamId handed_from;  // the input whose buffer the stream takes (PassSpec::hand_over), if any
-  Buffer items;   // registration segments, from the scheduler's idle ones; held until the stage's counters are read
+  Buffer items;   // registration segments, from the step arena or the idle ones; held until the stage's counters are read
+  std::size_t arena_at = StepArena::none;
   std::size_t needed = 0;         // bytes of segments the last execution asked for
   std::size_t segment_bytes = 0;  // of the segments this run's execution held
   Buffer counts;  // one count per segment
+  std::size_t counts_at = StepArena::none;
   std::size_t segments = 0;
   std::size_t segment_capacity = 0;  // lock-free: items a work-item's segment holds
   std::uint32_t overflow_slot = no_slot;
@@ -89,6 +97,7 @@ struct PassState {
   const Kernel& active() const { return mode == Registration::global_atomic && atomic_kernel.get() ? atomic_kernel : kernel; }
   std::vector<EmitterState> emitters;
   Buffer keep;
+  std::size_t keep_at = StepArena::none;
   std::optional<ListState> list;
   std::vector<StreamId> inputs;
   PassStats stats;
@@ -120,7 +129,7 @@ struct Scheduler::State {
       : context(c), graph(std::move(g)), options(o), scan(c), compactor(c, scan),
         merge_interleaved(c.programs().kernel("runtime/compact.cl", "cs_merge_interleaved")),
         merge_planned(c.programs().kernel("runtime/compact.cl", "cs_merge_planned")),
-        no_plan(c, sizeof(cl_uint), "registration plan")
+        no_plan(c, sizeof(cl_uint), "registration plan"), arena(c)
   {
   }
 
@@ -139,6 +148,17 @@ struct Scheduler::State {
   std::vector<std::vector<unsigned char>> params;
   Timeline timeline;
   RunStats stats;
+  StepArena arena;
+  // Until memory runs short: from then on, what lives within a run is held pass by
+  // pass (segments in the idle pool, streams in buffers of their own), so that any of
+  // it that is idle can go back.
+  bool use_arena = options.step_arena;
+  bool pressed = false;
+  // This run packs transient outputs late (packs_late): without a memory budget, or
+  // into an arena whose start found room for it twice over. A stream packed late is
+  // allocated while its segments hold its items, when the pass can no longer fall back
+  // to the global counter: under a budget it would run in slices instead.
+  bool late = false;
 
   Timeline* tl() { return options.profile ? &timeline : nullptr; }
   const StreamSpec& spec(StreamId s) const { return graph.stream(s); }
@@ -146,13 +166,37 @@ struct Scheduler::State {
   const StreamState& state(StreamId s) const { return streams.at(s.index); }
   std::size_t words(StreamId s) const { return spec(s).element_bytes / 4; }
 
+  // Within a run a transient stream's old items go first and its buffer comes from the
+  // arena; otherwise the old buffer stays until the new one is allocated.
   void allocate(StreamId s, std::size_t items)
   {
     if (items > state(s).limit) throw StreamLimitExceeded(spec(s).name, items, state(s).limit);
     auto& st = state(s);
-    st.buffer = Buffer(context, items * spec(s).element_bytes, spec(s).name.c_str());
+    const std::size_t bytes = items * spec(s).element_bytes;
+    if (running && use_arena && st.transient) {
+      drop(st);
+      st.buffer = arena.take(bytes, spec(s).name.c_str(), st.arena_at);
+    } else {
+      Buffer fresh(context, bytes, spec(s).name.c_str());
+      arena.give_back(st.arena_at);
+      st.buffer = std::move(fresh);
+    }
     st.capacity = items;
     st.peak_bytes = std::max(st.peak_bytes, st.buffer.bytes());
+  }
+
+  void restore(StreamId s)
+  {
+    auto& st = state(s);
+    if (st.released > st.capacity) with_memory([&] { grow(s, st.released, false); });
+    st.released = 0;
+  }
+
+  void drop(StreamState& st)
+  {
+    arena.give_back(st.arena_at);
+    st.buffer = Buffer();
+    st.capacity = 0;
   }
 
   // Grows a variable stream to hold `needed` items, with slack up to its limit. Its
@@ -161,8 +205,7 @@ struct Scheduler::State {
   {
     auto& st = state(s);
     if (st.base > 0) return grow_gathered(s, needed, slack);
-    st.buffer = Buffer();
-    st.capacity = 0;
+    drop(st);
     allocate(s, slack ? std::min(grown(needed), std::max(st.limit, needed)) : needed);
   }
 
@@ -219,6 +262,10 @@ struct Scheduler::State {
   // hold 260), and the stages after this one can share the new buffer.
   void take_segments(EmitterState& e, std::size_t bytes)
   {
+    if (use_arena) {
+      e.items = arena.take(bytes, "registration segments", e.arena_at);
+      return;
+    }
     const auto fits = smallest_holding(idle_segments, bytes, [](const Buffer& b) { return b.bytes(); });
     if (fits != idle_segments.end()) {
       const std::size_t excess = fits->bytes() - bytes;
@@ -235,21 +282,71 @@ struct Scheduler::State {
     with_memory([&] { e.items = Buffer(context, std::max<std::size_t>(bytes, 1), "registration segments"); });
   }
 
+  std::vector<Buffer> borrow_idle_scratch(const std::vector<std::size_t>& sizes) const
+  {
+    if (use_arena) return arena.lend(sizes);
+    const std::size_t align = std::max<std::size_t>(context.device().base_address_align, 1);
+    std::vector<std::size_t> offsets;
+    std::size_t end = 0;
+    for (const std::size_t bytes : sizes) {
+      offsets.push_back(end);
+      end = round_up(end + std::max<std::size_t>(bytes, 1), align);
+    }
+    const auto fits = smallest_holding(idle_segments, end, [](const Buffer& b) { return b.bytes(); });
+    std::vector<Buffer> slices;
+    if (sizes.empty() || fits == idle_segments.end()) return slices;
+    for (std::size_t k = 0; k < sizes.size(); ++k) slices.push_back(fits->slice(offsets[k], std::max<std::size_t>(sizes[k], 1)));
+    return slices;
+  }
+
   void give_back_segments(EmitterState& e)
   {
-    if (e.items) idle_segments.push_back(std::move(e.items));
+    if (e.arena_at != StepArena::none) drop_segments(e);
+    else if (e.items) idle_segments.push_back(std::move(e.items));
+  }
+
+  // Segments, with their counts where those came from the arena too.
+  void drop_segments(EmitterState& e)
+  {
+    arena.give_back(e.arena_at);
+    e.items = Buffer();
+    drop_stage_scratch(e.counts, e.counts_at);
+  }
+
+  // Scratch of at least `bytes` that the stage alone reads: from the arena, given back
+  // with the stage's segments; without it, held from run to run.
+  void take_stage_scratch(Buffer& buffer, std::size_t& at, std::size_t bytes, const char* label)
+  {
+    if (!use_arena) {
+      drop_stage_scratch(buffer, at);
+      with_memory([&] { ensure_capacity(context, buffer, bytes, label); });
+      return;
+    }
+    if (at != StepArena::none && buffer.bytes() >= bytes) return;
+    arena.give_back(at);
+    buffer = Buffer();
+    with_memory([&] { buffer = arena.take(bytes, label, at); });
+  }
+
+  void drop_stage_scratch(Buffer& buffer, std::size_t& at)
+  {
+    if (at == StepArena::none) return;
+    arena.give_back(at);
+    buffer = Buffer();
   }
 
   // After a stage's counters are read and nothing of it overflowed.
   void give_back_segments(const std::vector<PassState*>& stage)
   {
     std::vector<std::size_t> needs;
-    for (PassState* p : stage)
+    for (PassState* p : stage) {
       for (auto& e : p->emitters)
         if (e.items) {
           needs.push_back(e.needed);
           give_back_segments(e);
         }
+      drop_stage_scratch(p->keep, p->keep_at);
+    }
     if (!needs.empty()) stage_needs.push_back(std::move(needs));
   }
 
@@ -328,14 +425,18 @@ struct Scheduler::State {
         freed = true;
       }
     };
+    pressed = true;
     for (auto& idle : idle_segments) release(idle);
     idle_segments.clear();
     for (auto& other : passes) {
       if (std::find(busy.begin(), busy.end(), &other) != busy.end()) continue;
       for (auto& e : other.emitters) {
-        release(e.items);
+        if (e.items || e.counts) freed = true;
+        drop_segments(e);
         release(e.counts);
       }
+      if (other.keep) freed = true;
+      drop_stage_scratch(other.keep, other.keep_at);
       release(other.keep);
       // What a pass yet to run this run will emit holds the last run's items, which
       // nothing reads before it; it comes back at its size when the pass runs.
@@ -344,8 +445,7 @@ struct Scheduler::State {
           auto& st = state(s);
           if (!st.buffer) continue;
           st.released = std::max(st.released, st.capacity);
-          st.buffer = Buffer();
-          st.capacity = 0;
+          drop(st);
           freed = true;
         }
       if (auto& l = other.list) {
@@ -355,6 +455,7 @@ struct Scheduler::State {
         l->capacity = 0;
       }
     }
+    if (arena.release()) freed = true;
     return freed;
   }
 
@@ -490,7 +591,7 @@ struct Scheduler::State {
   void fall_back_to_global_counter(PassState& p)
   {
     for (auto& e : p.emitters) {
-      e.items = Buffer();
+      drop_segments(e);
       e.segment_bytes = 0;
     }
     if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
@@ -510,7 +611,7 @@ struct Scheduler::State {
     e.segment_bytes = e.items.bytes();
     // Segmented lock: each spilled item's group and rank follow the counts.
     const std::size_t words = options.registration == Registration::segmented_lock ? 1 + 2 * spill_per_group : 1;
-    with_memory([&] { ensure_capacity(context, e.counts, e.segments * words * sizeof(cl_uint), "registration counts"); });
+    take_stage_scratch(e.counts, e.counts_at, e.segments * words * sizeof(cl_uint), "registration counts");
   }
 
   void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
@@ -620,6 +721,12 @@ struct Scheduler::State {
     if (redo == Redo::full) {
       // Once a run has fallen back it stays there: its reruns must not try segments again.
       p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
+      // Outputs that memory pressure or a new run took come back at their size before
+      // any segments are taken: the segments then fit beside them, or the pass registers
+      // through the global counter (a handed-over output gets its buffer once packed).
+      for (auto& e : p.emitters)
+        if (e.handed_from == StreamId{} && !(late && state(e.stream).transient)) restore(e.stream);
+      if (p.spec->culls()) restore(p.spec->cull_target);
       for (auto& e : p.emitters) {
         if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(e);
         forget_stale_plan(e, segment_count(global));
@@ -640,10 +747,10 @@ struct Scheduler::State {
         for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(e);
       for (auto& e : p.emitters) {
         auto& st = state(e.stream);
-        if (st.released > st.capacity && !hands_over(p, e)) with_memory([&] { grow(e.stream, st.released, false); });
+        if (st.released > st.capacity && !packs_late(p, e)) with_memory([&] { grow(e.stream, st.released, false); });
         st.released = 0;
       }
-      if (p.spec->culls()) with_memory([&] { ensure_capacity(context, p.keep, n * sizeof(cl_uint), "cull flags"); });
+      if (p.spec->culls()) take_stage_scratch(p.keep, p.keep_at, n * sizeof(cl_uint), "cull flags");
       // Without segments to hand over, the output needs its own buffer: as large as the
       // input, a first guess that saves a rerun where the output is about its size.
       for (auto& e : p.emitters) {
@@ -673,7 +780,7 @@ struct Scheduler::State {
           ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets");
           scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
         });
-        if (!hands_over(p, e)) merge_segments(p, e);
+        if (!packs_late(p, e)) merge_segments(p, e);
       }
     }
     if (p.spec->culls()) {
@@ -718,34 +825,57 @@ struct Scheduler::State {
     return p.mode == Registration::segmented_lock && e.handed_from != StreamId{};
   }
 
-  // After the stage's counters are read and no pass of it runs again: each handed-over
-  // output takes a buffer that holds its items (its own, else the input's, else a new
-  // one), the other goes back, and the segments are packed there. The input is left
-  // empty, which run() checks for before it reads the input again. Taking the input's
-  // buffer gives the input the output's, in steady state the empty one the input was
-  // left with last run, so that a step allocates nothing here. Where the output needs
-  // a new buffer, the input is kept until it has one: the pass may then still run
-  // again, in slices, if there is no room for it.
-  void pack_handed_over(PassState& p)
+  // Whether the emitter's segments are packed only once the stage's counters are read:
+  // handed-over outputs, and in the arena every transient one, whose stream then takes
+  // exactly its items, where the segments packed before it in the stage lay (the front
+  // update's triangle pairs where its next front's segments were: cloth-ball's arena
+  // 118 -> 97 MB).
+  bool packs_late(const PassState& p, const EmitterState& e) const
+  {
+    return hands_over(p, e) || (p.mode == Registration::segmented_lock && late && state(e.stream).transient);
+  }
+
+  // After the stage's counters are read and no pass of it runs again: the outputs that
+  // pack late, in order, each taking a buffer of its items, then in the arena giving its
+  // segments' place to the next.
+  void pack_late(PassState& p)
   {
     for (auto& e : p.emitters) {
-      if (!hands_over(p, e)) continue;
-      auto &in = state(e.handed_from), &out = state(e.stream);
-      const std::size_t items = host_counters[out.slot];
-      if (items > out.limit) throw StreamLimitExceeded(spec(e.stream).name, items, out.limit);
-      if (out.capacity < items && in.capacity >= items) {
-        std::swap(out.buffer, in.buffer);
-        std::swap(out.capacity, in.capacity);
-        out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
+      if (!packs_late(p, e)) continue;
+      if (hands_over(p, e)) {
+        hand_over(p, e);
+      } else {
+        const std::size_t items = host_counters[state(e.stream).slot];
+        if (state(e.stream).capacity < items) with_memory([&] { grow(e.stream, items, false); });
       }
-      if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
-      if (in.capacity > 0) allocate(e.handed_from, 0);
-      in.count = 0;
-      in.known = true;
-      in.handed_to = spec(e.stream).name;
-      p.handed_over = true;
       if (e.segments > 0) merge_segments(p, e);
+      if (use_arena) drop_segments(e);
     }
+  }
+
+  // A handed-over output takes a buffer that holds its items (its own, else the
+  // input's, else a new one), and the other goes back. The input is left empty, which
+  // run() checks for before it reads the input again. Taking the input's buffer gives
+  // the input the output's, in steady state the empty one the input was left with last
+  // run, so that a step allocates nothing here. Where the output needs a new buffer, the
+  // input is kept until it has one: the pass may then still run again, in slices, if
+  // there is no room for it.
+  void hand_over(PassState& p, const EmitterState& e)
+  {
+    auto &in = state(e.handed_from), &out = state(e.stream);
+    const std::size_t items = host_counters[out.slot];
+    if (items > out.limit) throw StreamLimitExceeded(spec(e.stream).name, items, out.limit);
+    if (out.capacity < items && in.capacity >= items) {
+      std::swap(out.buffer, in.buffer);
+      std::swap(out.capacity, in.capacity);
+      out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
+    }
+    if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
+    if (in.capacity > 0) allocate(e.handed_from, 0);
+    in.count = 0;
+    in.known = true;
+    in.handed_to = spec(e.stream).name;
+    p.handed_over = true;
   }
 
   // After the stage's counters are read: whether a group's or work-item's items did not
@@ -784,7 +914,7 @@ struct Scheduler::State {
   // (a handed-over one gets its buffer only once they are known).
   bool outgrew(const PassState& p, const EmitterState& e) const
   {
-    return !hands_over(p, e) && host_counters[state(e.stream).slot] > state(e.stream).capacity;
+    return !packs_late(p, e) && host_counters[state(e.stream).slot] > state(e.stream).capacity;
   }
 
   // After the stage's counters are read: whether an output of the pass overflowed its
@@ -835,7 +965,7 @@ struct Scheduler::State {
           overflowing.push_back(p);
         } else if (std::find(packed.begin(), packed.end(), p) == packed.end()) {
           try {
-            pack_handed_over(*p);
+            pack_late(*p);
           } catch (const DeviceMemoryExhausted&) {
             out_of_memory(p);
             throw;
@@ -853,7 +983,7 @@ struct Scheduler::State {
           auto& dst = state(e.stream);
           if (segments_overflowed(*p, e)) {
             // The rerun plans from this execution's counts, so every group fits.
-            if (hands_over(*p, e)) merge_segments(*p, e, false);
+            if (packs_late(*p, e)) merge_segments(*p, e, false);
             if (p->mode == Registration::segmented_lock) adopt_plan(e);
             else e.segment_capacity = grown(host_counters[e.overflow_slot]);
             r = Redo::full;
@@ -874,7 +1004,7 @@ struct Scheduler::State {
         execute(*p, r);
         ++p->stats.reruns;
         if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
-                                            [&](const EmitterState& e) { return hands_over(*p, e); }))
+                                            [&](const EmitterState& e) { return packs_late(*p, e); }))
           busy.erase(std::find(busy.begin(), busy.end(), p));
       } catch (const DeviceMemoryExhausted&) {
         out_of_memory(p);
@@ -938,6 +1068,7 @@ struct Scheduler::State {
       for (auto& e : p.emitters) e.segment_bytes = 0;
     }
     stage_needs.clear();
+    start_arena();
     for (auto& st : streams) st.peak_bytes = st.buffer.bytes();
     for (const auto& p : passes)
       for (const auto& handover : p.spec->handovers)
@@ -986,6 +1117,27 @@ struct Scheduler::State {
     }
     keep_needed_segments();
     collect_stats();
+  }
+
+  // What lived within the last run goes back: its segments (still held where a run
+  // ended early) and its transient streams, which come back at their size when their
+  // producers run. Then the arena takes the size the last run needed.
+  void start_arena()
+  {
+    if (pressed) use_arena = false;
+    for (auto& p : passes) {
+      for (auto& e : p.emitters)
+        if (e.arena_at != StepArena::none || e.counts_at != StepArena::none) drop_segments(e);
+      drop_stage_scratch(p.keep, p.keep_at);
+    }
+    for (auto& st : streams)
+      if (st.arena_at != StepArena::none || (use_arena && st.transient && st.buffer)) {
+        st.released = std::max(st.released, st.capacity);
+        drop(st);
+      }
+    if (use_arena) arena.start_run();
+    else arena.release();
+    late = use_arena && (context.memory_limit() >= context.device().global_memory || arena.bytes() > 0);
   }
 
   // Where a pass had no room even in a stage of its own (error set), or where the run
@@ -1247,6 +1399,11 @@ struct Scheduler::State {
     // once the run is over they are all idle.
     stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
     for (const auto& idle : idle_segments) stats.segment_bytes += idle.bytes();
+    // The arena, less the transient streams that it holds (counted as theirs).
+    std::size_t in_streams = 0;
+    for (const auto& st : streams)
+      if (st.arena_at != StepArena::none && st.arena_at + st.buffer.bytes() <= arena.bytes()) in_streams += st.buffer.bytes();
+    stats.segment_bytes += arena.bytes() - in_streams;
     for (auto& p : passes) {
       p.stats.device_ns = by_label[p.spec->name];
       pass_total += p.stats.device_ns;
@@ -1292,6 +1449,14 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
       s.streams[i].count = spec.size;
     }
   }
+  for (const auto& pass : s.graph.passes()) {
+    for (StreamId e : pass.emits) s.streams[e.index].transient = true;
+    if (pass.culls()) s.streams[pass.cull_target.index].transient = true;
+  }
+  for (const auto& pass : s.graph.passes())
+    for (const auto& [input, output] : pass.handovers) s.streams[input.index].transient = s.streams[output.index].transient = false;
+  for (std::size_t i = 0; i < s.streams.size(); ++i)
+    if (s.graph.streams()[i].gathered) s.streams[i].transient = false;
   s.params.resize(s.graph.params().size());
   for (std::size_t index : order) {
     const PassSpec& spec = s.graph.passes()[index];
@@ -1326,6 +1491,10 @@ Scheduler::~Scheduler() = default;
 
 void Scheduler::run() { state_->run(); }
 bool Scheduler::release_idle_scratch() { return state_->release_idle_scratch(); }
+std::vector<Buffer> Scheduler::borrow_idle_scratch(const std::vector<std::size_t>& sizes) const
+{
+  return state_->borrow_idle_scratch(sizes);
+}
 
 void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
 {
@@ -1423,6 +1592,7 @@ void Scheduler::swap(StreamId a, StreamId b)
   std::swap(x.known, y.known);
   std::swap(x.partial, y.partial);
   std::swap(x.handed_to, y.handed_to);
+  std::swap(x.arena_at, y.arena_at);
 }
 
 const Buffer& Scheduler::buffer(StreamId stream) const { return state_->state(stream).buffer; }

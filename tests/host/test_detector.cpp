@@ -669,6 +669,13 @@ TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks
                            << peaks[2]);
     CHECK(held[4] == held[3]);
     CHECK(peaks[4] == held[4]);  // a settled step allocates nothing
+    // The contacts' records, sort and layout for the host take idle scratch between
+    // runs, rather than memory that the next step's front update runs beside.
+    const auto& passes = detector.stats().run.passes;
+    const auto readback = std::find_if(passes.begin(), passes.end(),
+                                       [](const runtime::PassStats& p) { return p.name == "canonical contacts"; });
+    REQUIRE(readback != passes.end());
+    CHECK(readback->scratch_bytes == 0);
     // Segments sized for four items a front pair, as they were, took 2.7 times.
     for (std::size_t peak : peaks) CHECK(double(peak) <= 2 * double(held.back()));
     // The second step's segments, sized from what the first emitted rather than from

@@ -262,15 +262,49 @@ struct ExpandThenCopy {
   }
 };
 
+TEST_CASE("what lives within a run shares one buffer: a settled run holds less, allocates nothing, emits the same",
+          "[runtime][scheduler][quick]")
+{
+  // expand's segments and its pairs live in the first stage, the pairs, copy's
+  // segments and its words in the second: in the step arena the second stage's take
+  // the first's segments' place. Each on a context of its own, so that what is in use
+  // is the scheduler's. The pairs are compared as sets: the words copy the first half of
+  // the pairs' words in the order the pairs were emitted, which a GPU does not keep
+  // within a work-group.
+  const std::size_t n = 200000;
+  const ExpandThenCopy e(n);
+  const auto values = random_values(n, 47);
+  const auto settled = [&](bool arena, std::vector<Pair>& pairs) {
+    Context own(filter_from_environment());
+    own.programs().add_sources(test_kernel_sources());
+    Scheduler s(own, e.g, {Registration::segmented_lock, true, arena});
+    s.upload(e.values, values);
+    for (int frame = 0; frame < 4; ++frame) s.run();
+    own.reset_memory_high_water();
+    s.run();
+    e.check_words(s);
+    pairs = sorted(s.download<Pair>(e.pairs));
+    CHECK(own.memory_high_water() == own.memory_in_use());
+    return own.memory_in_use();
+  };
+  std::vector<Pair> in_arena, apart;
+  const std::size_t with = settled(true, in_arena), without = settled(false, apart);
+  INFO("held with the arena " << with << ", without " << without);
+  CHECK(in_arena == sorted(cstreams::test::reference(values).pairs));
+  CHECK(in_arena == apart);
+  CHECK(with < without);
+}
+
 TEST_CASE("a later stage's pass registers into the segments an earlier stage's pass held", "[runtime][scheduler][quick]")
 {
+  // Without the step arena: segments go through the pool of idle buffers.
   auto& ctx = cstreams::test::device();
   const std::size_t n = 20000;
   const ExpandThenCopy e(n);
   // Segmented lock, the default: segments follow what each group emitted, so a burst of
   // every value asks for several times the usual segments. (Lock-free ones hold the
   // busiest work-item's items for every work-item, a burst's size already.)
-  Scheduler s(ctx, e.g, {Registration::segmented_lock, true});
+  Scheduler s(ctx, e.g, {Registration::segmented_lock, true, false});
   s.upload(e.values, random_values(n, 41));
   for (int frame = 0; frame < 3; ++frame) {
     s.run();
@@ -306,10 +340,11 @@ TEST_CASE("a later stage's pass registers into the segments an earlier stage's p
 TEST_CASE("a pass that outgrows the idle segments gives them back before it takes larger ones",
           "[runtime][scheduler][quick]")
 {
+  // Without the step arena: segments go through the pool of idle buffers.
   auto& ctx = cstreams::test::device();
   const std::size_t n = 200000;
   const ExpandThenCopy e(n);
-  Scheduler s(ctx, e.g, {Registration::segmented_lock, true});
+  Scheduler s(ctx, e.g, {Registration::segmented_lock, true, false});
   s.upload(e.values, random_values(n, 43));
   for (int frame = 0; frame < 3; ++frame) s.run();
   const std::size_t pool = s.stats().segment_bytes;
@@ -346,7 +381,8 @@ TEST_CASE("under any memory limit a stage either fits, giving back scratch, or f
   for (const auto x : v)
     if (x & 1u) odd_values.push_back(x);
 
-  Scheduler reference(cstreams::test::device(), g, {Registration::segmented_lock, true});
+  // Limits up to what the run holds with its scratch in buffers of their own.
+  Scheduler reference(cstreams::test::device(), g, {Registration::segmented_lock, true, false});
   reference.upload(values, v);
   reference.run();
   const auto expected = sorted(reference.download<Pair>(pairs));

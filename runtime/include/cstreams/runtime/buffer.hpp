@@ -36,7 +36,8 @@ public:
 
   // Bytes [offset, offset + bytes) of this buffer as a buffer of their own (an OpenCL
   // sub-buffer), counted in this one's memory and keeping it alive; `offset` must be a
-  // multiple of the device's base_address_align.
+  // multiple of the device's base_address_align. A slice of a slice is a sub-buffer of
+  // the whole (OpenCL has no sub-buffers of sub-buffers).
   Buffer slice(std::size_t offset, std::size_t bytes) const;
 
   cl_mem get() const noexcept { return allocation_ ? allocation_->mem.get() : nullptr; }
@@ -50,8 +51,8 @@ private:
     {
       account->add(bytes);
     }
-    Allocation(Handle<cl_mem> m, std::size_t b, std::shared_ptr<const Allocation> w)
-        : whole(std::move(w)), mem(std::move(m)), bytes(b)
+    Allocation(Handle<cl_mem> m, std::size_t b, std::shared_ptr<const Allocation> w, std::size_t o)
+        : whole(std::move(w)), mem(std::move(m)), bytes(b), offset(o)
     {
     }
     Allocation(const Allocation&) = delete;
@@ -64,6 +65,7 @@ private:
     std::shared_ptr<const Allocation> whole;  // of a slice; declared first, so released after it
     Handle<cl_mem> mem;
     std::size_t bytes;
+    std::size_t offset = 0;                  // of a slice, in the whole
     std::shared_ptr<MemoryAccount> account;  // of a whole buffer
   };
   std::shared_ptr<const Allocation> allocation_;

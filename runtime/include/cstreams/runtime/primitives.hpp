@@ -74,6 +74,10 @@ public:
   // in order: `records` itself or the sorter's scratch (valid until the next sort).
   // n must stay below 2^31.
   const Buffer& sort(const Buffer& records, std::size_t n, Timeline* timeline = nullptr, const char* label = "sort");
+  // The same with the caller's scratch, of at least scratch_bytes_for(n) bytes.
+  const Buffer& sort(const Buffer& records, const Buffer& scratch, std::size_t n, Timeline* timeline = nullptr,
+                     const char* label = "sort");
+  std::size_t scratch_bytes_for(std::size_t n) const;
   // Allocates the scratch that sorting n records takes, so that a caller short of
   // memory can make room before it sorts anything.
   void reserve(std::size_t n);

@@ -16,6 +16,10 @@ class Context;
 struct SchedulerOptions {
   Registration registration = Registration::lock_free;
   bool profile = true;  // record OpenCL profiling events for per-pass device time
+  // What lives within a run (registration segments, the streams passes emit anew each
+  // run) shares one buffer, sized by the last run; false: each holds its own, the
+  // segments through a pool of idle buffers shared between stages.
+  bool step_arena = true;
 };
 
 struct PassStats {
@@ -91,6 +95,12 @@ public:
   // planned as before) and returns whether any memory went back: room for device work
   // outside the graph that runs short of memory.
   bool release_idle_scratch();
+  // Slices of scratch idle between runs, one of each size (at the device's base-address
+  // alignment): of the step arena's free space, or of one idle registration-segment
+  // buffer; none where that does not hold them all. For device work between runs that
+  // would otherwise hold memory of its own through the runs. The next run writes over
+  // them: drop them before it.
+  std::vector<Buffer> borrow_idle_scratch(const std::vector<std::size_t>& sizes) const;
 
   // Host transfers. Uploading to a fixed stream resizes it to `count` items;
   // uploading to a variable stream sets its count (growing it if needed).
