@@ -284,19 +284,7 @@ struct Scheduler::State {
 
   std::vector<Buffer> borrow_idle_scratch(const std::vector<std::size_t>& sizes) const
   {
-    if (use_arena) return arena.lend(sizes);
-    const std::size_t align = std::max<std::size_t>(context.device().base_address_align, 1);
-    std::vector<std::size_t> offsets;
-    std::size_t end = 0;
-    for (const std::size_t bytes : sizes) {
-      offsets.push_back(end);
-      end = round_up(end + std::max<std::size_t>(bytes, 1), align);
-    }
-    const auto fits = smallest_holding(idle_segments, end, [](const Buffer& b) { return b.bytes(); });
-    std::vector<Buffer> slices;
-    if (sizes.empty() || fits == idle_segments.end()) return slices;
-    for (std::size_t k = 0; k < sizes.size(); ++k) slices.push_back(fits->slice(offsets[k], std::max<std::size_t>(sizes[k], 1)));
-    return slices;
+    return use_arena ? arena.lend(sizes) : std::vector<Buffer>{};
   }
 
   void give_back_segments(EmitterState& e)

@@ -95,11 +95,11 @@ public:
   // planned as before) and returns whether any memory went back: room for device work
   // outside the graph that runs short of memory.
   bool release_idle_scratch();
-  // Slices of scratch idle between runs, one of each size (at the device's base-address
-  // alignment): of the step arena's free space, or of one idle registration-segment
-  // buffer; none where that does not hold them all. For device work between runs that
-  // would otherwise hold memory of its own through the runs. The next run writes over
-  // them: drop them before it.
+  // Slices of the step arena's free space between runs, one of each size (at the
+  // device's base-address alignment); none without the arena or where its free space
+  // does not hold them all. For device work between runs that would otherwise hold
+  // memory of its own through the runs. The next run writes over them: drop them before
+  // it.
   std::vector<Buffer> borrow_idle_scratch(const std::vector<std::size_t>& sizes) const;
 
   // Host transfers. Uploading to a fixed stream resizes it to `count` items;
