@@ -3,7 +3,6 @@
 
 #include <cstddef>
 #include <map>
-#include <utility>
 #include <vector>
 
 namespace cstreams::runtime {
@@ -45,12 +44,10 @@ public:
   bool release();
 
   std::size_t bytes() const { return buffer_.bytes(); }
-  bool empty() const { return taken_.empty(); }
 
 private:
   // The lowest place where `bytes` are free.
   std::size_t first_fit(std::size_t bytes) const;
-
 
   Context& context_;
   std::size_t align_;

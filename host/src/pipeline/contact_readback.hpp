@@ -22,9 +22,9 @@ public:
   // The contacts of the scheduler's last run, in canonical order, where the read put
   // them: valid until the next read. `stats` receives the device time (with `profile`)
   // and the launches it took. Its device scratch (records, the sort's, the Contacts) is
-  // lent by the scheduler's idle scratch; where that cannot hold it, the readback holds
-  // scratch of its own, and short of device memory for it has the scheduler give back
-  // its idle scratch.
+  // lent by the scheduler's step arena between runs; without one that holds it, the
+  // readback holds scratch of its own, and short of device memory for it has the
+  // scheduler give back its idle scratch.
   ContactSpan read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats);
   std::size_t scratch_bytes() const { return records_.bytes() + sort_scratch_.bytes() + contacts_.bytes(); }
 
