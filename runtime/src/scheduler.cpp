@@ -899,7 +899,7 @@ struct Scheduler::State {
   }
 
   // After the stage's counters are read: whether the emitter's items outgrew its stream
-  // (a handed-over one gets its buffer only once they are known).
+  // (one packed late gets its buffer only once they are known).
   bool outgrew(const PassState& p, const EmitterState& e) const
   {
     return !packs_late(p, e) && host_counters[state(e.stream).slot] > state(e.stream).capacity;
@@ -944,7 +944,7 @@ struct Scheduler::State {
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
-      // A pass whose outputs all fit is done: it packs its handed-over outputs now (its
+      // A pass whose outputs all fit is done: it packs its outputs that pack late now (its
       // segments stay busy until then), and its segments hold nothing needed any more,
       // so they may go back if growing another pass's output runs short of memory.
       overflowing.clear();
