@@ -733,10 +733,11 @@ struct Scheduler::State {
       // Lock-free: the next run tries small segments again.
       if (p.mode == Registration::global_atomic)
         for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(e);
+      // Outputs the segments left to the global counter come back now; those that pack
+      // late get their buffer once packed.
       for (auto& e : p.emitters) {
-        auto& st = state(e.stream);
-        if (st.released > st.capacity && !packs_late(p, e)) with_memory([&] { grow(e.stream, st.released, false); });
-        st.released = 0;
+        if (!packs_late(p, e)) restore(e.stream);
+        state(e.stream).released = 0;
       }
       if (p.spec->culls()) take_stage_scratch(p.keep, p.keep_at, n * sizeof(cl_uint), "cull flags");
       // Without segments to hand over, the output needs its own buffer: as large as the
