@@ -26,8 +26,68 @@
 #define CS_BOX_HIT 1   /* a contact at its start (*hit) */
 #define CS_BOX_SPLIT 2 /* refined: the halves are *lo and *hi, the earlier one (for t) *lo */
 #define CS_BOX_NARROW 3 /* refined: narrowed to *lo alone (contract.h) */
+#define CS_BOX_CUT 4   /* refined: *lo cut into the pieces of *cuts (cs_piece) */
 
 #define CS_NARROWING_PASSES 4
+
+/* Several halvings of a box at once: their count in the low 3 bits, then 2 bits a
+ * halving for the parameter it halves (0 t, 1 u, 2 v), into 2^count pieces. */
+typedef uint cs_cuts;
+
+inline uint cs_pieces(const cs_cuts cuts) { return 1u << (cuts & 7u); }
+
+/* Halves b along parameter j: the upper half where `upper`, else the lower one. Both
+ * write to copies: Mesa's rusticl let a callee's writes to a struct passed by value
+ * reach the caller's (the second piece of a box came out cut from the first). */
+inline cs_box cs_half(const cs_box b, const uint j, const int upper)
+{
+  cs_box r = b;
+  if (j == 0) {
+    const real mid = (real)0.5 * (b.t0 + b.t1);
+    if (upper) r.t0 = mid;
+    else r.t1 = mid;
+  } else if (j == 1) {
+    const real mid = (real)0.5 * (b.u0 + b.u1);
+    if (upper) r.u0 = mid;
+    else r.u1 = mid;
+  } else {
+    const real mid = (real)0.5 * (b.v0 + b.v1);
+    if (upper) r.v0 = mid;
+    else r.v1 = mid;
+  }
+  return r;
+}
+
+/* Piece p of b: what halving it as `cuts` says, taking the upper half at halving l
+ * where bit (count - 1 - l) of p is set, gives. Piece 0 starts earliest. */
+inline cs_box cs_piece(const cs_box b, const cs_cuts cuts, const uint p)
+{
+  const uint count = cuts & 7u;
+  cs_box r = b;
+  for (uint l = 0; l < count; ++l) r = cs_half(r, (cuts >> (3 + 2 * l)) & 3u, (p >> (count - 1 - l)) & 1u);
+  return r;
+}
+
+/* `levels` halvings (at most 7), each along the parameter F varies most with once the
+ * ones before are made (a halving halves the spread along its parameter), or 0 where
+ * some piece could be too short to halve: a parameter halved c times must span more
+ * than 2^(c + 2) steps of 1, so that every midpoint falls strictly inside its piece. */
+inline cs_cuts cs_plan_cuts(const cs_box b, const real spread_of_b[3], const int levels)
+{
+  real spread[3] = {spread_of_b[0], spread_of_b[1], spread_of_b[2]};
+  uint along[3] = {0, 0, 0};
+  cs_cuts cuts = (uint)levels;
+  for (int l = 0; l < levels; ++l) {
+    const int j = cs_most_varied(spread);
+    cuts |= (uint)j << (3 + 2 * l);
+    ++along[j];
+    spread[j] *= (real)0.5;
+  }
+  const real span[3] = {b.t1 - b.t0, b.u1 - b.u0, b.v1 - b.v0};
+  for (int j = 0; j < 3; ++j)
+    if (along[j] && !(span[j] > ldexp((real)CS_EPS, (int)along[j] + 2))) return 0;
+  return cuts;
+}
 
 /* Whether b is under half of a along some parameter. */
 inline int cs_box_halved(const cs_box a, const cs_box b)
@@ -38,10 +98,11 @@ inline int cs_box_halved(const cs_box a, const cs_box b)
 
 /* best: the earliest contact so far (2 for none). out_of_work: the query's work limit
  * is reached, so a box that is not dropped is a contact (*limited set). *slack is set
- * when the tolerance cut the search short. */
+ * when the tolerance cut the search short. A box to refine is halved once (*lo, *hi),
+ * or with levels > 1 cut into 2^levels pieces of *lo where they are not too short. */
 inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, const real tol, const real tolerance,
-                        const real separation, const real best, const int out_of_work, int* slack, int* limited,
-                        real* hit, cs_box* lo, cs_box* hi)
+                        const real separation, const real best, const int out_of_work, const int levels, int* slack,
+                        int* limited, real* hit, cs_box* lo, cs_box* hi, cs_cuts* cuts)
 {
   if (b.t0 >= best) return CS_BOX_DROP;
   if (b.t0 >= best - tolerance) {
@@ -55,9 +116,8 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
     *slack = 1;
   }
   if (vertex_face && b.u0 + b.v0 > 1) return CS_BOX_DROP;
-  real width, farthest, nearest[2];
-  int axis;
-  if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, &axis)) return CS_BOX_DROP;
+  real width, farthest, nearest[2], spread[3];
+  if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, spread)) return CS_BOX_DROP;
   *hit = b.t0;
   if (width <= tol) return CS_BOX_HIT;
   if (separation > 0) {
@@ -84,6 +144,8 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
   }
   *lo = b;
   if (cs_box_halved(whole, b)) return CS_BOX_NARROW; /* as far along as a halving, with no second box */
+  if (levels > 1 && (*cuts = cs_plan_cuts(b, spread, levels)) != 0) return CS_BOX_CUT;
+  const int axis = cs_most_varied(spread);
   *hi = b;
   if (axis == 0) {
     lo->t1 = hi->t0 = (real)0.5 * (b.t0 + b.t1);

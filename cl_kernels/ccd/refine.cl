@@ -41,6 +41,18 @@
  * limits, one more false positive on cloth-funnel (double). */
 #define CS_MOST_ROUNDS 1024u
 #define CS_MOST_BOXES 4096u
+/* From round 8 on, a box to refine is cut into eighths (three halvings at once,
+ * cs_plan_cuts) rather than halved. By then the list holds only the queries whose boxes
+ * close in on a contact or tile a curve of near-contacts, a round costs about one
+ * visit's latency however few its boxes, and three halvings a round need a third of the
+ * rounds (H200, single precision: cloth-ball 39 rounds -> 21, 2.95 -> 2.81 ms; n-body
+ * 37 -> 17). Earlier rounds fill the device, and boxes cut finer than the bounds ask
+ * would cost there. Nor is a query cut finer where its pieces could take it past
+ * CS_MOST_BOXES, which would answer it as out of work (more limits on the real steps,
+ * 10 on rod-twist in single precision). The round and the query's own boxes decide, so
+ * answers still depend on the query alone. */
+#define CS_CUT_FINER_FROM 8u
+#define CS_FINER_HALVINGS 3
 
 /* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
 inline uint cs_float_key_down(const real t)
@@ -309,6 +321,7 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
     const uint i = base + get_local_id(0);
     int visit = CS_BOX_DROP;
     cs_item lo, hi;
+    cs_cuts cuts = 0;
     if (i < items) {
       const cs_item it = in[i];
       __global cs_refine_state* s = state + it.query;
@@ -339,24 +352,27 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
         const real scale = cs_query_scale(&q);
 #endif
         const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
+        const int levels = round >= CS_CUT_FINER_FROM && last_splits << CS_FINER_HALVINGS <= CS_MOST_BOXES / 2
+                               ? CS_FINER_HALVINGS
+                               : 1;
         visit = cs_visit_box(&f, it.box, vertex_face, tolerance * scale, tolerance, separation, before, out_of_work,
-                             &slack, &limited, &t, &lo.box, &hi.box);
+                             levels, &slack, &limited, &t, &lo.box, &hi.box, &cuts);
       }
       cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       /* After the visit: issued before it, this store to a word that every box of the
        * query writes made cloth-ball's refinement a third slower in single precision. */
       s->work[(round + 1) % 3] = 0;
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
-      if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
-        atomic_inc(&s->work[round % 3]);
+      if (visit >= CS_BOX_SPLIT) {
+        atomic_add(&s->work[round % 3], visit == CS_BOX_CUT ? cs_pieces(cuts) / 2 : 1u);
         lo.query = hi.query = it.query;
         lo.work = hi.work = work;
       }
 #if CS_EARLIEST_ACROSS
       if (earliest_only) {
         first[(round + 1) % 3] = CS_NO_TIME;
-        /* Of the halves, lo starts no later. */
-        if (visit == CS_BOX_SPLIT || visit == CS_BOX_NARROW) {
+        /* Of the boxes, lo (or the one cut) starts no later. */
+        if (visit >= CS_BOX_SPLIT) {
           const uint start = cs_float_key_down(lo.box.t0);
           if (start < first[round % 3]) atomic_min(&first[round % 3], start);
         }
@@ -369,10 +385,19 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       }
 #endif
     }
-    const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : 0u;
+    const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : visit == CS_BOX_CUT ? cs_pieces(cuts) : 0u;
     const uint at = cs_worklist_append(group, counts, round, boxes);
-    if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
-    if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
+    if (visit == CS_BOX_CUT) {
+      for (uint j = 0; j < boxes; ++j)
+        if (cs_worklist_fits(counts, capacity, at + j)) {
+          cs_item piece = lo;
+          piece.box = cs_piece(lo.box, cuts, j);
+          out[at + j] = piece;
+        }
+    } else {
+      if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
+      if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
+    }
   }
   cs_worklist_check_loops(counts, round);
 }

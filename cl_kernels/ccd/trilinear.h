@@ -92,16 +92,22 @@ inline void cs_trilinear_slopes(const cs_trilinear* f, const int k, const real a
   slope[2] = f->c[4][k] + at[0] * f->c[5][k];
 }
 
+/* The parameter along which F varies most, of spreads as cs_trilinear_bounds gives. */
+inline int cs_most_varied(const real spread[3])
+{
+  return spread[0] >= spread[1] ? (spread[0] >= spread[2] ? 0 : 2) : (spread[1] >= spread[2] ? 1 : 2);
+}
+
 /* Bounds F over the box. Returns 0 when F certainly stays farther than `separation`
  * from zero there: along the coordinate axes, along F at the box centre, or along the
  * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
  * widest side of the bounding box of F, *farthest to the largest |F_k| it allows,
  * nearest[0] and nearest[1] to the largest |F_k| at the corner where that is smallest
  * among the corners at the box's start and end time (with a positive separation
- * only, where they matter), and *split to the parameter
- * (0 t, 1 u, 2 v) along which F varies most. */
+ * only, where they matter), and spread[j] to how much F varies along parameter j
+ * (0 t, 1 u, 2 v) across the box (cs_most_varied). */
 inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
-                               real* farthest, real nearest[2], int* split)
+                               real* farthest, real nearest[2], real spread[3])
 {
   real value[8][3], error[8][3];
   for (int c = 0; c < 8; ++c) {
@@ -139,7 +145,7 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
 
   /* Corner c has t = c >> 2, u = (c >> 1) & 1, v = c & 1; the j-th pair of corners
    * across t starts at j, across u at 0, 1, 4, 5, across v at 0, 2, 4, 6. */
-  real spread[3] = {0, 0, 0};
+  spread[0] = spread[1] = spread[2] = 0;
   for (int j = 0; j < 4; ++j) {
     const int u = (j & 1) | ((j & 2) << 1), v = 2 * j;
     for (int k = 0; k < 3; ++k) {
@@ -148,7 +154,6 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
       spread[2] = fmax(spread[2], fabs(value[v + 1][k] - value[v][k]));
     }
   }
-  *split = spread[0] >= spread[1] ? (spread[0] >= spread[2] ? 0 : 2) : (spread[1] >= spread[2] ? 1 : 2);
 
   /* Any direction d separates rigorously when d.F is bounded away from zero at every
    * corner. The guesses are F at the centre and the normal, (C + t D) x (E + t G) at the

@@ -646,6 +646,30 @@ TEST_CASE("contacts do not depend on the work-group size a device runs", "[detec
   }
 }
 
+TEST_CASE("no step of cloth-ball peaks above what a settled one holds", "[detector][slow]")
+{
+  // Issue 12 asks for 200 MiB on cloth-ball, which settled cubic steps hold (192 MiB on
+  // pocl and the H200). The first step, searched from the roots, sized its candidates'
+  // segments for two of each a triangle pair (201 MiB); the third, the first with a
+  // step arena, ran beside the contact readback's scratch of the step before (203 MiB).
+  const Scene scene = cstreams::test::cloth_ball();
+  const Step step = load_step(scene, 0);
+  runtime::Context context(filter_from_environment());
+  DetectorOptions options;
+  options.solver.solver = Solver::cubic;
+  Detector detector(context, describe(scene, 0), options);
+  std::vector<std::size_t> peaks;
+  for (int repeat = 0; repeat < 5; ++repeat) {
+    run_step(detector, step);
+    peaks.push_back(detector.stats().peak_bytes);
+  }
+  const std::size_t held = context.memory_in_use();
+  for (std::size_t k = 0; k < peaks.size(); ++k) {
+    INFO("step " << k << " peaks at " << peaks[k] << " bytes; settled, the detector holds " << held);
+    CHECK(double(peaks[k]) <= 1.01 * double(held));
+  }
+}
+
 TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks far above it", "[detector][quick]")
 {
   // The first step searches from seeds; the second is the first from a whole front,
@@ -669,13 +693,6 @@ TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks
                            << peaks[2]);
     CHECK(held[4] == held[3]);
     CHECK(peaks[4] == held[4]);  // a settled step allocates nothing
-    // The contacts' records, sort and layout for the host take idle scratch between
-    // runs, rather than memory that the next step's front update runs beside.
-    const auto& passes = detector.stats().run.passes;
-    const auto readback = std::find_if(passes.begin(), passes.end(),
-                                       [](const runtime::PassStats& p) { return p.name == "canonical contacts"; });
-    REQUIRE(readback != passes.end());
-    CHECK(readback->scratch_bytes == 0);
     // Segments sized for four items a front pair, as they were, took 2.7 times.
     for (std::size_t peak : peaks) CHECK(double(peak) <= 2 * double(held.back()));
     // The second step's segments, sized from what the first emitted rather than from

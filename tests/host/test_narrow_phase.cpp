@@ -9,8 +9,12 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
+#include <set>
+#include <tuple>
 
 using namespace cstreams;
 
@@ -187,6 +191,99 @@ TEST_CASE("constructed degenerate cases: the conservative solver misses none", "
       }
     }
   }
+}
+
+namespace {
+
+// Cuts n random boxes, from sides of 1 down to sides below what `levels` halvings of
+// this precision can still cut, `levels` halvings at once (tests/kernels/cut_pieces.cl),
+// and checks that every box cut is tiled by its pieces: along each parameter the
+// pieces' bounds partition the box's side, each piece spans one part of each partition,
+// and no two pieces span the same three parts. A contact can hide in no gap.
+template <class Real> void check_cut_pieces(runtime::Context& device, const runtime::Kernel& kernel, int levels)
+{
+  const std::size_t n = 2000, pieces = std::size_t(1) << levels;
+  std::mt19937 rng{std::uint32_t(levels)};
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::vector<Real> boxes(6 * n), spreads(3 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double side = std::pow(10.0, -(std::numeric_limits<Real>::digits10 + 2) * unit(rng) * unit(rng));
+      const Real lo = Real((1 - side) * unit(rng));
+      boxes[6 * i + 2 * j] = lo;
+      boxes[6 * i + 2 * j + 1] = std::max(std::nextafter(lo, Real(2)), std::min(Real(1), Real(lo + side)));
+      spreads[3 * i + j] = Real(unit(rng));
+    }
+  runtime::Buffer in(device, boxes.size() * sizeof(Real), "boxes"), sp(device, spreads.size() * sizeof(Real), "spreads"),
+      plans(device, n * 4, "plans"), out(device, n * pieces * 6 * sizeof(Real), "pieces");
+  device.write(in, boxes.data(), boxes.size() * sizeof(Real));
+  device.write(sp, spreads.data(), spreads.size() * sizeof(Real));
+  kernel.set_args(in, sp, cl_uint(n), cl_int(levels), plans, out);
+  device.launch(kernel, n, 0);
+  std::vector<cl_uint> plan(n);
+  std::vector<Real> piece(n * pieces * 6);
+  device.read(plans, plan.data(), n * 4);
+  device.read(out, piece.data(), piece.size() * sizeof(Real));
+  std::size_t cut = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Real* b = &boxes[6 * i];
+    const Real shortest = std::min({b[1] - b[0], b[3] - b[2], b[5] - b[4]});
+    INFO("box " << i << ", shortest side " << shortest << ", " << levels << " halvings");
+    if (shortest > Real(1e-3)) REQUIRE(plan[i] != 0);
+    if (plan[i] == 0) continue;
+    ++cut;
+    const Real* p = &piece[6 * i * pieces];
+    std::set<Real> bounds[3];
+    for (std::size_t k = 0; k < pieces; ++k)
+      for (int j = 0; j < 3; ++j) {
+        REQUIRE(p[6 * k + 2 * j] < p[6 * k + 2 * j + 1]);
+        bounds[j].insert(p[6 * k + 2 * j]);
+        bounds[j].insert(p[6 * k + 2 * j + 1]);
+      }
+    std::size_t cells = 1;
+    for (int j = 0; j < 3; ++j) {
+      REQUIRE(*bounds[j].begin() == b[2 * j]);
+      REQUIRE(*bounds[j].rbegin() == b[2 * j + 1]);
+      cells *= bounds[j].size() - 1;
+    }
+    REQUIRE(cells == pieces);
+    std::set<std::tuple<long, long, long>> spanned;
+    for (std::size_t k = 0; k < pieces; ++k) {
+      long part[3];
+      for (int j = 0; j < 3; ++j) {
+        const auto lo = bounds[j].find(p[6 * k + 2 * j]), hi = bounds[j].find(p[6 * k + 2 * j + 1]);
+        REQUIRE(std::next(lo) == hi);
+        part[j] = long(std::distance(bounds[j].begin(), lo));
+      }
+      spanned.emplace(part[0], part[1], part[2]);
+    }
+    REQUIRE(spanned.size() == pieces);
+    // The first piece starts the box, the way the refinement's earliest start needs.
+    CHECK(p[0] == b[0]);
+    // The first halving is along the parameter F varies most with, as a single one is.
+    const Real* s = &spreads[3 * i];
+    const int most = int(std::max_element(s, s + 3) - s);
+    CHECK(bounds[most].size() > 2);
+  }
+  CHECK(cut > n / 2);
+  CHECK(cut < n);
+}
+
+}  // namespace
+
+TEST_CASE("a box the refinement cuts into pieces at once is tiled by them", "[narrow][quick]")
+{
+  auto& device = cstreams::test::device();
+  device.programs().add_sources(ccd_kernel_sources());
+  for (Precision p : precisions())
+    for (int levels : {1, 2, 3}) {
+      INFO(to_string(p));
+      const bool in_double = p == Precision::double_;
+      const runtime::Kernel kernel = device.programs().kernel(
+          "kernels/cut_pieces.cl", "test_cut_pieces", in_double ? "-DCS_REAL_DOUBLE=1" : "-DCS_REAL_DOUBLE=0");
+      if (in_double) check_cut_pieces<double>(device, kernel, levels);
+      else check_cut_pieces<float>(device, kernel, levels);
+    }
 }
 
 TEST_CASE("without 64-bit atomics the conservative solver in double precision rounds its times down to float",

@@ -24,4 +24,10 @@ Scene cloth_funnel()
   return scene_from_frames({dir + "227.ply", dir + "228.ply"});
 }
 
+Scene cloth_ball()
+{
+  const std::string dir = benchmark_path("scalable-ccd-sample/cloth-ball/frames/");
+  return scene_from_frames({dir + "cloth_ball92.ply", dir + "cloth_ball93.ply"});
+}
+
 }  // namespace cstreams::test

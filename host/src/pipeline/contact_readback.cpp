@@ -47,23 +47,21 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   if (n == 0) return {};
   const std::size_t record_bytes = n * record_words * sizeof(cl_uint), sort_bytes = sorter_.scratch_bytes_for(n),
                     contact_bytes = n * sizeof(Contact);
-  // Held from one step to the next, this scratch set the peak of the step after: its
-  // front update ran beside it (cloth-ball: 11.9 MB).
-  const std::vector<runtime::Buffer> lent = scheduler.borrow_idle_scratch({record_bytes, sort_bytes, contact_bytes});
-  if (lent.empty()) {
+  // Lent by the step arena's free space between runs. Where it has none to lend, the
+  // readback takes scratch of its own for this read alone: held from one step to the
+  // next, it set the peak of the step after, whose front update ran beside it, and of
+  // the first step with an arena (cloth-ball: 11.9 MB).
+  std::vector<runtime::Buffer> scratch = scheduler.borrow_idle_scratch({record_bytes, sort_bytes, contact_bytes});
+  if (scratch.empty())
     runtime::allocate_making_room(
         [&] {
-          runtime::ensure_capacity(context_, records_, record_bytes, "contact records");
-          runtime::ensure_capacity(context_, sort_scratch_, sort_bytes, "sort scratch");
-          runtime::ensure_capacity(context_, contacts_, contact_bytes, "contacts");
+          scratch.clear();
+          scratch.emplace_back(context_, record_bytes, "contact records");
+          scratch.emplace_back(context_, sort_bytes, "sort scratch");
+          scratch.emplace_back(context_, contact_bytes, "contacts");
         },
         [&] { return scheduler.release_idle_scratch(); });
-  } else {
-    records_ = sort_scratch_ = contacts_ = runtime::Buffer();
-  }
-  const runtime::Buffer& records = lent.empty() ? records_ : lent[0];
-  const runtime::Buffer& sort_scratch = lent.empty() ? sort_scratch_ : lent[1];
-  const runtime::Buffer& contacts = lent.empty() ? contacts_ : lent[2];
+  const runtime::Buffer &records = scratch[0], &sort_scratch = scratch[1], &contacts = scratch[2];
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
   const std::uint64_t launches = context_.kernel_launches();
@@ -87,7 +85,6 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   runtime::ensure_capacity(context_, staging_, contact_bytes, "contacts");
   context_.read(contacts, staging_.data(), contact_bytes);
   for (const auto& e : timeline.resolve()) stats.device_ns += e.nanoseconds;
-  stats.scratch_bytes = scratch_bytes();
   // The read wrote Contacts' bytes into memory the host never constructed objects in:
   // Contact is trivially copyable, an implicit-lifetime type (P0593), so the read
   // creates them as memcpy would.

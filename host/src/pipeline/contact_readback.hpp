@@ -23,10 +23,9 @@ public:
   // them: valid until the next read. `stats` receives the device time (with `profile`)
   // and the launches it took. Its device scratch (records, the sort's, the Contacts) is
   // lent by the scheduler's step arena between runs; without one that holds it, the
-  // readback holds scratch of its own, and short of device memory for it has the
-  // scheduler give back its idle scratch.
+  // read takes scratch of its own and gives it back, and short of device memory for it
+  // has the scheduler give back its idle scratch.
   ContactSpan read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats);
-  std::size_t scratch_bytes() const { return records_.bytes() + sort_scratch_.bytes() + contacts_.bytes(); }
 
 private:
   runtime::Context& context_;
@@ -35,11 +34,7 @@ private:
   runtime::Kernel as_host_;
   runtime::Sorter sorter_;
   runtime::Buffer first_vertex_;  // per object
-  // Scratch of its own, where the scheduler could not lend it.
-  runtime::Buffer records_;
-  runtime::Buffer sort_scratch_;
-  runtime::Buffer contacts_;      // the sorted records as the host's Contacts
-  runtime::HostStaging staging_;  // and as read, handed out in place
+  runtime::HostStaging staging_;  // the Contacts as read, handed out in place
 };
 
 }  // namespace cstreams

@@ -222,7 +222,6 @@ void Detector::run_step(Report report)
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
   }
-  stats.run.scratch_bytes += s.readback.scratch_bytes();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();
   // Over every slice of a step that ran in slices (a stream's count is the last one's).
