@@ -138,6 +138,7 @@ Context::Context(const DeviceInfo& device, std::size_t max_work_group_size, std:
 
 Context::~Context()
 {
+  if (ahead_) clFinish(ahead_.get());
   if (queue_) clFinish(queue_.get());
 }
 
@@ -199,6 +200,60 @@ void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t fi
 }
 
 void Context::finish() { check(clFinish(queue_.get()), "clFinish"); }
+
+Handle<cl_event> Context::write_ahead(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset,
+                                      const Handle<cl_event>& after)
+{
+  if (!ahead_) {
+    cl_int status = CL_SUCCESS;
+    ahead_ = Handle<cl_command_queue>(clCreateCommandQueue(context_.get(), device_.id, 0, &status));
+    check(status, "clCreateCommandQueue", "opening a queue for uploads ahead on " + device_.name);
+  }
+  const cl_event wait = after.get();
+  cl_event event = nullptr;
+  check_with(clEnqueueWriteBuffer(ahead_.get(), buffer.get(), CL_FALSE, offset, bytes, data, wait ? 1 : 0,
+                                  wait ? &wait : nullptr, &event),
+             "clEnqueueWriteBuffer", [&] { return "uploading " + std::to_string(bytes) + " bytes ahead"; });
+  Handle<cl_event> written(event);
+  // Queued is not started: without a flush a driver may hold the write until the
+  // queue's next blocking call, after the work it was to overlap.
+  check(clFlush(ahead_.get()), "clFlush", "starting an upload ahead");
+  return written;
+}
+
+namespace {
+
+std::vector<cl_event> raw_events(const std::vector<Handle<cl_event>>& events)
+{
+  std::vector<cl_event> raw;
+  for (const auto& e : events)
+    if (e) raw.push_back(e.get());
+  return raw;
+}
+
+}  // namespace
+
+void Context::wait_for(const std::vector<Handle<cl_event>>& events)
+{
+  const std::vector<cl_event> raw = raw_events(events);
+  if (raw.empty()) return;
+  check(clEnqueueBarrierWithWaitList(queue_.get(), cl_uint(raw.size()), raw.data(), nullptr),
+        "clEnqueueBarrierWithWaitList", "waiting for uploads ahead");
+}
+
+void Context::block_until(const std::vector<Handle<cl_event>>& events)
+{
+  const std::vector<cl_event> raw = raw_events(events);
+  if (!raw.empty())
+    check(clWaitForEvents(cl_uint(raw.size()), raw.data()), "clWaitForEvents", "waiting for uploads ahead");
+}
+
+Handle<cl_event> Context::marker()
+{
+  cl_event event = nullptr;
+  check(clEnqueueMarkerWithWaitList(queue_.get(), 0, nullptr, &event), "clEnqueueMarkerWithWaitList");
+  return Handle<cl_event>(event);
+}
 
 Context::ThreadGuard::ThreadGuard(Context& context) : context_(context)
 {

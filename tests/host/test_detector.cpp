@@ -702,3 +702,63 @@ TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks
     CHECK(double(peaks[1]) <= 1.05 * double(std::max(peaks[0], held.back())));
   }
 }
+
+// Replaying frames, the next step's ends upload while a step runs (upload_ahead). The
+// contacts must be those of the same positions set before each step: with one body
+// given new positions only every other step (it stays in between), an upload replaced
+// by a second one and one by set_positions(), and bad ones refused without a trace.
+TEST_CASE("positions uploaded ahead give the contacts of positions set before each step", "[detector][quick]")
+{
+  const Scene bodies = cstreams::test::generated_scene("n-body", 12, 40);
+  const std::size_t steps = bodies.frame_count() - 1;
+  const auto frame = [&](std::size_t f) { return load_step(bodies, std::min(f, steps - 1)); };
+  const auto ends = [&](std::size_t step) { return frame(step - 1).x1; };  // step k ends at frame k
+  const std::uint32_t lazy = 1, replaced = 2;
+  const auto moves = [&](std::uint32_t o, std::size_t step) {
+    return bodies.objects[o].kind != ObjectKind::static_ && (o != lazy || step % 2 == 0);
+  };
+  for (auto precision : {Precision::single, Precision::double_}) {
+    INFO(to_string(precision));
+    if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
+    DetectorOptions options;
+    options.solver.precision = precision;
+    Detector set(cstreams::test::device(), describe(bodies, 0), options),
+        ahead(cstreams::test::device(), describe(bodies, 0), options);
+    const auto first = ends(1);
+    for (std::uint32_t o = 0; o < bodies.objects.size(); ++o)
+      if (moves(o, 1)) ahead.set_positions(o, first[o]);
+    std::size_t contacts = 0;
+    for (std::size_t step = 1; step <= steps; ++step) {
+      INFO("step " << step);
+      const auto now = ends(step);
+      for (std::uint32_t o = 0; o < bodies.objects.size(); ++o)
+        if (moves(o, step)) set.set_positions(o, now[o]);
+      // Read while the step runs: kept until it returns.
+      const auto next = ends(std::min(step + 1, steps));
+      if (step < steps) {
+        ahead.upload_ahead(0, now[0]);  // replaced below
+        for (std::uint32_t o = 0; o < bodies.objects.size(); ++o)
+          if (moves(o, step + 1)) ahead.upload_ahead(o, next[o]);
+        CHECK_THROWS_AS(ahead.upload_ahead(0, std::vector<Vec3>(3)), InputError);
+        std::vector<Vec3> broken = next[0];
+        broken[0][1] = std::numeric_limits<double>::quiet_NaN();
+        CHECK_THROWS_AS(ahead.upload_ahead(0, broken), InputError);
+      }
+      if (step == 3) {
+        const auto before = ends(step - 1);
+        set.set_positions(replaced, before[replaced]);
+        ahead.set_positions(replaced, before[replaced]);
+      }
+      set.detect();
+      ahead.detect();
+      const ContactSpan a = set.contacts(), b = ahead.contacts();
+      REQUIRE(a.size() == b.size());
+      for (std::size_t i = 0; i < a.size(); ++i) {
+        CHECK(a[i].same_features(b[i]));
+        CHECK(a[i].toi == b[i].toi);
+      }
+      contacts += a.size();
+    }
+    CHECK(contacts > 0);
+  }
+}

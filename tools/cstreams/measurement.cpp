@@ -6,10 +6,12 @@
 #include <cstreams/scenes/generators.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <unistd.h>
 
 namespace cstreams::cli {
@@ -80,6 +82,9 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
   cmd.add_option("--repeat", o.repeat, "Run each step this many times and report medians (the first is a warm-up)");
   cmd.add_flag("--no-profile", o.no_profile,
                "Record no kernel timings: device times are unknown, wall times leave out what timing costs the host");
+  cmd.add_flag("--no-upload-ahead", o.no_upload_ahead,
+               "Upload each step's positions just before it runs, not while the step before runs (steps in a row, "
+               "without --repeat)");
 }
 
 DetectorOptions detector_options(const MeasureOptions& o)
@@ -150,24 +155,34 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   // unknown (NaN; null in JSON).
   const bool timed = context.device().profiling_timer && !o.no_profile;
   const double unknown = std::numeric_limits<double>::quiet_NaN();
+  // Steps in a row upload the next one's ends while a step runs.
+  const bool ahead = o.repeat == 1 && !o.no_upload_ahead;
+  std::optional<Step> next;
   for (std::size_t frame = first; frame < last; ++frame) {
-    const Step step = load_step(scene, frame);
-    std::vector<double> host, device;
+    const Step step = next ? std::move(*next) : load_step(scene, frame);
+    next.reset();
+    if (ahead && frame + 1 < last) next = load_step(scene, frame + 1);
+    std::vector<double> host, device, uploads_and_step;
     DetectorStats stats;
     for (unsigned r = 0; r < o.repeat; ++r) {
+      const auto started = std::chrono::steady_clock::now();
       for (std::uint32_t obj = 0; obj < scene.objects.size(); ++obj) {
         if (scene.objects[obj].kind == ObjectKind::static_) continue;
-        // Steps that follow each other need only the new end; a repeated step both.
-        if (r == 0) detector.set_positions(obj, step.x1[obj]);
-        else detector.set_step(obj, step.x0[obj], step.x1[obj]);
+        // Steps that follow each other need only the new end (uploaded ahead, after the
+        // first); a repeated step both.
+        if (r > 0) detector.set_step(obj, step.x0[obj], step.x1[obj]);
+        else if (!ahead || frame == first) detector.set_positions(obj, step.x1[obj]);
+        if (next) detector.upload_ahead(obj, next->x1[obj]);
       }
       detector.detect(o.earliest_only ? Report::earliest_toi : Report::contacts);
+      const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
       stats = detector.stats();
       // A warm-up's peak counts: it is what the step costs when it first runs.
       m.peak_bytes = std::max(m.peak_bytes, stats.peak_bytes);
       // With repeats, the first run of a step is a warm-up.
       if (o.repeat == 1 || r > 0) {
         host.push_back(stats.host_ms);
+        uploads_and_step.push_back(wall);
         device.push_back(timed ? stats.device_ns() * 1e-6 : unknown);
         for (const auto& p : stats.run.passes) m.pass_ms[p.name].push_back(timed ? p.device_ns * 1e-6 : unknown);
       }
@@ -177,7 +192,9 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     const double host_ms = median(host), device_ms = median(device);
     m.host_ms.push_back(host_ms);
     m.device_ms.push_back(device_ms);
+    m.step_ms.push_back(median(uploads_and_step));
     m.steps.push_back(step_json(frame, stats, host_ms, timed));
+    m.steps.back()["step_ms"] = m.step_ms.back();
     m.steps.back()["device_ms"] = device_ms;
     m.contact_count += stats.contacts;
     std::vector<double> earliest;

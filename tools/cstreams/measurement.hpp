@@ -38,6 +38,9 @@ struct MeasureOptions {
   // Record no OpenCL profiling events: device times unknown, and the wall time without
   // what the events cost the host.
   bool no_profile = false;
+  // Steps in a row (no repeats): upload each step's positions before it runs, rather
+  // than while the step before runs (Detector::upload_ahead).
+  bool no_upload_ahead = false;
 };
 
 // Registers the scene and the pipeline's options on a subcommand.
@@ -67,6 +70,7 @@ struct Measurement {
   std::map<std::string, std::vector<double>> pass_ms;
   std::vector<std::string> pass_order;
   std::vector<double> host_ms, device_ms;
+  std::vector<double> step_ms;  // wall time of each step's uploads and detect() together
   std::size_t peak_bytes = 0;  // the device's high-water mark over every step run, warm-ups included
   std::vector<Contact> contacts;      // every step's, in step order, each step canonical (none if earliest_only)
   std::size_t contact_count = 0;      // over all steps, as the device counted them (DetectorStats::contacts)

@@ -51,6 +51,8 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
   else
     std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
                 median(report.device_ms));
+  std::printf("uploads   %.3f ms per step with its positions' uploads (%s)\n", median(report.step_ms),
+              o.repeat == 1 && !o.no_upload_ahead ? "made while the step before ran" : "made before it");
   std::printf("memory    %.1f MiB on the device at most (during a step)\n", double(report.peak_bytes) / (1 << 20));
 }
 
@@ -114,6 +116,7 @@ void run(const RunOptions& o)
                      {"faces", scene.face_count()},
                      {"median_host_ms", median(report.host_ms)},
                      {"median_device_ms", median(report.device_ms)},
+                     {"median_step_ms", median(report.step_ms)},
                      {"peak_bytes", report.peak_bytes},
                      {"steps", report.steps}};
     write_file_atomically(o.json, [&](std::ostream& out) { out << j.dump(1) << "\n"; });

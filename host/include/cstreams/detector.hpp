@@ -12,6 +12,9 @@
 //     detector.detect();                                  // the step from the last positions
 //     for (const cstreams::Contact& c : detector.contacts()) ...
 //   }
+//
+// Replaying recorded frames, upload_ahead(cloth, frame[n + 1]) before the detect() of
+// step n (ending at frame n) lets that upload overlap the step.
 #include <cstreams/contacts.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
@@ -123,6 +126,13 @@ public:
   void set_positions(std::uint32_t object, const std::vector<Vec3>& end);
   // Both ends of the next step (replaying recorded frames, repeating a step).
   void set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end);
+  // The positions at the end of the step after the next one, where they are known
+  // before the next step runs (replaying recorded frames): rounded, copied and uploaded
+  // while the next detect() runs, they become the ends of the step after it when it
+  // returns. `end` is read then: it must stay as it is until the next detect() returns.
+  // Objects given none stay where that step leaves them; set_positions() afterwards
+  // still replaces them, and a second call before the next detect() this one.
+  void upload_ahead(std::uint32_t object, const std::vector<Vec3>& end);
 
   // A failure on the device part-way through a step (memory exhausted, a lost device)
   // is thrown as runtime::Error and leaves the detector refusing every further call

@@ -47,15 +47,32 @@ void inflate(Kdop18f& d, float separation)
 
 }  // namespace
 
+void check_float_positions(const std::vector<Vec3>& x)
+{
+  // One pass without branches (NaN fails the comparison too), which the compiler
+  // vectorizes; only bad input looks for the vertex to name. With a branch a
+  // coordinate, 1.5M triangles' positions took 3 ms to check.
+  bool bad = false;
+  for (const Vec3& p : x) bad |= !(std::fabs(p[0]) <= double(FLT_MAX)) | !(std::fabs(p[1]) <= double(FLT_MAX)) |
+                                 !(std::fabs(p[2]) <= double(FLT_MAX));
+  if (!bad) return;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (!(std::fabs(x[i][k]) <= double(FLT_MAX)))
+        throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
+}
+
+void round_to_float(const std::vector<Vec3>& x, float* out)
+{
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (int k = 0; k < 3; ++k) out[3 * i + std::size_t(k)] = static_cast<float>(x[i][k]);
+}
+
 std::vector<float> to_float_positions(const std::vector<Vec3>& x)
 {
+  check_float_positions(x);
   std::vector<float> out(3 * x.size());
-  for (std::size_t i = 0; i < x.size(); ++i)
-    for (int k = 0; k < 3; ++k) {
-      if (!std::isfinite(x[i][k]) || std::fabs(x[i][k]) > double(FLT_MAX))
-        throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
-      out[3 * i + std::size_t(k)] = static_cast<float>(x[i][k]);
-    }
+  round_to_float(x, out.data());
   return out;
 }
 

@@ -365,9 +365,11 @@ struct GraphBuilder {
     const std::size_t nv = t.vertex_count, nf = t.faces.size(), ne = t.edges.size(), nn = l.nodes.size();
     s.x0 = g.fixed("x0", 12, nv);
     s.x1 = g.fixed("x1", 12, nv);
+    s.x_next = g.fixed("x next", 12, 0);
     if (exact_input) {
       s.x0_double = g.fixed("x0 double", 24, nv);
       s.x1_double = g.fixed("x1 double", 24, nv);
+      s.x_next_double = g.fixed("x next double", 24, 0);
     }
     s.faces = g.fixed("faces", 12, nf);
     s.edges = g.fixed("edges", 8, ne);

@@ -7,12 +7,15 @@
 #include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/errors.hpp>
+#include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/host_staging.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <future>
 #include <map>
 
 namespace cstreams {
@@ -114,6 +117,17 @@ struct Detector::State {
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
   ContactSpan contacts;  // in the readback's host memory
+  // Positions uploaded ahead (upload_ahead): the callers' positions, uploaded when the
+  // next step starts by a task of their own through pinned copies; the uploads of the
+  // step that runs (their events, once the task is done) and of the last one (which
+  // may still read the copies); and when the buffers they go to are no longer read.
+  struct Ahead {
+    runtime::HostStaging single, exact;
+    std::vector<const std::vector<Vec3>*> ends;  // per object; null: none
+    std::future<std::vector<runtime::Handle<cl_event>>> uploading;
+    std::vector<runtime::Handle<cl_event>> taken;
+    runtime::Handle<cl_event> free;
+  } ahead;
   bool have_contacts = false;
   DetectorStats stats;
   // Why a step failed part-way on the device (its streams, front and positions are then
@@ -125,6 +139,81 @@ struct Detector::State {
     if (!failure.empty())
       throw Error("this detector cannot be used after its step failed on the device (" + failure +
                   "); create a new one");
+  }
+
+  void upload_ahead(std::uint32_t o, const std::vector<Vec3>& x)
+  {
+    runtime::Scheduler& q = *scheduler;
+    const std::size_t n = q.count(streams.x1);
+    // The first upload ahead gives the buffers their vertices: a static object's never
+    // change, and those of moving objects given none are copied in after each step.
+    if (q.count(streams.x_next) != n) {
+      q.resize(streams.x_next, n);
+      q.copy(streams.x1, 0, streams.x_next, 0, n);
+      runtime::ensure_capacity(context, ahead.single, n * 3 * sizeof(float), "positions uploaded ahead");
+      if (has(streams.x_next_double)) {
+        q.resize(streams.x_next_double, n);
+        q.copy(streams.x1_double, 0, streams.x_next_double, 0, n);
+        runtime::ensure_capacity(context, ahead.exact, n * sizeof(Vec3), "positions uploaded ahead");
+      }
+      ahead.ends.assign(scene.objects.size(), nullptr);
+      ahead.free = context.marker();
+    }
+    ahead.ends[o] = &x;
+  }
+
+  // As a step starts: a task rounds the positions given ahead into the pinned copies
+  // and uploads them while the step runs; the host's copying, as long as the upload
+  // (27 MB of 1.5M triangles in double), is off the step's path too.
+  void start_uploads_ahead()
+  {
+    if (std::none_of(ahead.ends.begin(), ahead.ends.end(), [](const auto* x) { return x != nullptr; })) return;
+    // The copies are written again once the last step's uploads (long done) are.
+    context.block_until(ahead.taken);
+    ahead.taken.clear();
+    const runtime::Buffer single = scheduler->buffer(streams.x_next);
+    const runtime::Buffer exact =
+        has(streams.x_next_double) ? scheduler->buffer(streams.x_next_double) : runtime::Buffer();
+    ahead.uploading = std::async(std::launch::async, [this, single, exact] {
+      std::vector<runtime::Handle<cl_event>> uploads;
+      for (std::uint32_t o = 0; o < ahead.ends.size(); ++o) {
+        const std::vector<Vec3>* x = ahead.ends[o];
+        if (!x) continue;
+        const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex;
+        float* rounded = static_cast<float*>(ahead.single.data()) + 3 * first;
+        round_to_float(*x, rounded);
+        const std::size_t vertex = 3 * sizeof(float);
+        uploads.push_back(context.write_ahead(single, rounded, x->size() * vertex, first * vertex, ahead.free));
+        if (!exact) continue;
+        Vec3* copy = static_cast<Vec3*>(ahead.exact.data()) + first;
+        std::copy(x->begin(), x->end(), copy);
+        uploads.push_back(context.write_ahead(exact, copy, x->size() * sizeof(Vec3), first * sizeof(Vec3), ahead.free));
+      }
+      return uploads;
+    });
+  }
+
+  // After a step: the positions uploaded ahead become the ends of the next one, where
+  // the objects given none stay.
+  void take_uploads_ahead()
+  {
+    if (!ahead.uploading.valid()) return;
+    runtime::Scheduler& q = *scheduler;
+    std::vector<runtime::Handle<cl_event>> uploads = ahead.uploading.get();
+    context.wait_for(uploads);
+    for (const ObjectSlot& slot : layout.slots) {
+      if (!slot.moving || ahead.ends[slot.object]) continue;
+      const std::size_t count = scene.objects[slot.object].positions.size();
+      q.copy(streams.x1, slot.first_vertex, streams.x_next, slot.first_vertex, count);
+      if (has(streams.x_next_double))
+        q.copy(streams.x1_double, slot.first_vertex, streams.x_next_double, slot.first_vertex, count);
+    }
+    q.swap(streams.x1, streams.x_next);
+    if (has(streams.x_next_double)) q.swap(streams.x1_double, streams.x_next_double);
+    // The next uploads go to the buffer the step's end was in, once nothing reads it.
+    ahead.free = context.marker();
+    ahead.taken = std::move(uploads);
+    std::fill(ahead.ends.begin(), ahead.ends.end(), nullptr);
   }
 
   // Runs device work; a failure other than bad input marks the detector unusable.
@@ -191,6 +280,14 @@ void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, co
   });
 }
 
+void Detector::upload_ahead(std::uint32_t object, const std::vector<Vec3>& end)
+{
+  State& s = *state_;
+  s.check_usable();
+  check_positions(s.scene, object, end);
+  s.guarded([&] { s.upload_ahead(object, end); });
+}
+
 void Detector::detect(Report report)
 {
   State& s = *state_;
@@ -205,6 +302,7 @@ void Detector::run_step(Report report)
   const auto started = std::chrono::steady_clock::now();
   const std::uint64_t launches = s.context.kernel_launches(), reads = s.context.blocking_reads();
   s.context.reset_memory_high_water();
+  s.start_uploads_ahead();
   const CcdStreams& st = s.streams;
   if (has(st.object_contacts)) s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
   s.stats.front_retries = s.front.run(*s.scheduler, st);
@@ -222,6 +320,7 @@ void Detector::run_step(Report report)
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
   }
+  s.take_uploads_ahead();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();
   // Over every slice of a step that ran in slices (a stream's count is the last one's).

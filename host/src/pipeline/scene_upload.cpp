@@ -14,7 +14,7 @@ bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 
 }  // namespace
 
-std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
 {
   if (o >= scene.objects.size())
     throw InputError("no object " + std::to_string(o) + " in a scene of " + std::to_string(scene.objects.size()));
@@ -24,10 +24,18 @@ std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_
     throw InputError("object '" + d.name + "' has " + std::to_string(d.positions.size()) + " vertices, not " +
                      std::to_string(x.size()));
   try {
-    return to_float_positions(x);
+    check_float_positions(x);
   } catch (const InputError& e) {
     throw InputError("object '" + d.name + "': " + e.what());
   }
+}
+
+std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+{
+  check_positions(scene, o, x);
+  std::vector<float> rounded(3 * x.size());
+  round_to_float(x, rounded.data());
+  return rounded;
 }
 
 void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,

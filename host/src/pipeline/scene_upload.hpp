@@ -15,8 +15,9 @@ namespace cstreams {
 void upload_scene(runtime::Scheduler& scheduler, const CcdStreams& streams, const SceneLayout& layout,
                   const SceneDescription& scene, double min_separation);
 
-// Positions of a moving object after the checks a caller's input must pass (an
-// InputError naming the object), rounded to float.
+// The checks a moving object's positions from a caller must pass (an InputError naming
+// the object), and the positions after them, rounded to float.
+void check_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
 std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
 
 // Writes one object's positions to a float stream and, in double precision, its exact twin.

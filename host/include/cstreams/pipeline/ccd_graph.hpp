@@ -67,6 +67,9 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePa
 // The streams of the CCD graph; those a scene does not need stay unset.
 struct CcdStreams {
   runtime::StreamId x0, x1, x0_double, x1_double;
+  // The ends of the step after the next, uploaded ahead (Detector::upload_ahead): no
+  // pass reads them, and they hold nothing until the first such upload.
+  runtime::StreamId x_next, x_next_double;
   runtime::StreamId faces, edges, nodes, levels, face_edges, owned, vertex_object;
   runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes;
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds

@@ -13,12 +13,14 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <vector>
 
 namespace cstreams::runtime {
 
 // A device with its OpenCL context, one in-order profiling queue and its program
 // registry. Everything the runtime enqueues goes through this queue, so passes need
-// no events to order themselves.
+// no events to order themselves; only uploads ahead (write_ahead) take a second
+// queue, ordered against the first through events.
 //
 // Threads: a context, and everything built on it, is used by one thread at a time.
 // Its kernels are shared objects whose arguments are set before each launch, so two
@@ -80,6 +82,19 @@ public:
                 Timeline* timeline = nullptr);
   void finish();
 
+  // Uploads ahead of the work on queue(), on a second in-order queue (opened at the
+  // first), so that they overlap it: the write starts once `after` completes (an event
+  // of queue(); none: at once) and reads `data` until its own event, returned,
+  // completes. Commands that read the buffer on queue() must wait_for() that event.
+  Handle<cl_event> write_ahead(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset,
+                               const Handle<cl_event>& after);
+  // Commands queued on queue() from now on start once these events complete.
+  void wait_for(const std::vector<Handle<cl_event>>& events);
+  // Returns once these events complete.
+  void block_until(const std::vector<Handle<cl_event>>& events);
+  // An event that completes once everything queued on queue() so far has.
+  Handle<cl_event> marker();
+
   // Every kernel launch and every blocking read this context has issued: a step's cost
   // beyond its kernels' time is mostly these (a launch ~5 us, a read ~16 us on the H200).
   std::uint64_t kernel_launches() const noexcept { return kernel_launches_; }
@@ -100,6 +115,7 @@ private:
   DeviceInfo device_;
   Handle<cl_context> context_;
   Handle<cl_command_queue> queue_;
+  Handle<cl_command_queue> ahead_;  // write_ahead()'s
   std::size_t work_group_size_ = 0;
   std::uint32_t loop_trip_limit_ = 0;
   std::size_t memory_limit_ = 0;
