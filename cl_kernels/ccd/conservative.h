@@ -71,7 +71,8 @@ inline cs_box cs_piece(const cs_box b, const cs_cuts cuts, const uint p)
 /* `levels` halvings (at most 7), each along the parameter F varies most with once the
  * ones before are made (a halving halves the spread along its parameter), or 0 where
  * some piece could be too short to halve: a parameter halved c times must span more
- * than 2^(c + 2) steps of 1, so that every midpoint falls strictly inside its piece. */
+ * than 2^(c + 2) CS_EPS (parameters are at most 1), so that every midpoint falls
+ * strictly inside its piece. */
 inline cs_cuts cs_plan_cuts(const cs_box b, const real spread_of_b[3], const int levels)
 {
   real spread[3] = {spread_of_b[0], spread_of_b[1], spread_of_b[2]};

@@ -44,13 +44,13 @@
 /* From round 8 on, a box to refine is cut into eighths (three halvings at once,
  * cs_plan_cuts) rather than halved. By then the list holds only the queries whose boxes
  * close in on a contact or tile a curve of near-contacts, a round costs about one
- * visit's latency however few its boxes, and three halvings a round need a third of the
- * rounds (H200, single precision: cloth-ball 39 rounds -> 21, 2.95 -> 2.81 ms; n-body
- * 37 -> 17). Earlier rounds fill the device, and boxes cut finer than the bounds ask
- * would cost there. Nor is a query cut finer where its pieces could take it past
- * CS_MOST_BOXES, which would answer it as out of work (more limits on the real steps,
- * 10 on rod-twist in single precision). The round and the query's own boxes decide, so
- * answers still depend on the query alone. */
+ * visit's latency however few its boxes, and three halvings a round leave far fewer
+ * rounds (H200, single precision: cloth-ball 39 rounds -> 23, 2.97 -> 2.85 ms; n-body
+ * double 29 -> 16, 4.18 -> 4.06). Earlier rounds fill the device, and boxes cut finer
+ * than the bounds ask would cost there. Nor is a query cut finer where its pieces could
+ * take it past CS_MOST_BOXES, which would answer it as out of work (10 more such
+ * answers on rod-twist in single precision). The round and the query's own boxes
+ * decide, so answers still depend on the query alone. */
 #define CS_CUT_FINER_FROM 8u
 #define CS_FINER_HALVINGS 3
 

@@ -133,29 +133,31 @@ TEST_CASE("a step that runs short of memory gives back registration segments and
   const std::size_t peak = peak_over_steps(scene, step, tiny, expected, &expected_candidates);
   REQUIRE(!expected.empty());
   // Registering every pass through the global counter needs no segments: the least a
-  // step can run in without batches.
+  // step could run in without batches, before segments were planned from the last run,
+  // packed late and shared with the step's other scratch (the step arena). Now the
+  // conservative step on pocl peaks within 1% of it, on either side from run to run,
+  // since how its work list grows after an overflow depends on which items it cut.
   DetectorOptions atomic = tiny;
   atomic.registration = runtime::Registration::global_atomic;
   const std::size_t floor = peak_over_steps(scene, step, atomic, atomic_contacts);
   CHECK(same(atomic_contacts, expected));
-  REQUIRE(floor < peak);
+  const std::size_t least = std::min(floor, peak), most = std::max(floor, peak);
 
-  // Any budget from that least to the unbudgeted peak fits, however the passes share
+  // Any budget from the least of the two to the most fits, however the passes share
   // it: idle scratch goes back, a stage ends early, passes register through the global
   // counter where segments do not fit. Below it the pass that runs short and those after
   // it that depend on it run in slices of its input, down to budgets that hold the
   // front twice; lower still, a step fails naming the allocation. A budget that ran
   // every step, and every larger one, gives the same contacts within the budget.
   // Below the least, budgets step down by shares of a quarter of it, or of the
-  // distance from it to the peak where that is more: segments planned from the last run
-  // bring the peak within a few percent of the least.
+  // distance from it to the most where that is more.
   unsigned sliced = 0;
   bool larger_ran = true;
-  const std::size_t below = std::max(peak - floor, floor / 4);
+  const std::size_t below = std::max(most - least, least / 4);
   for (double share : {1.0, 0.9, 0.75, 0.5, 0.25, 0.1, 0.02, 0.0, -0.1, -0.2, -0.3, -0.4, -0.5, -0.6, -0.7, -0.8, -0.9}) {
     runtime::Context context(filter_from_environment());
     Detector detector(context, describe(scene, 0), tiny);
-    const std::size_t limit = floor + std::ptrdiff_t(share * double(share < 0 ? below : peak - floor));
+    const std::size_t limit = least + std::ptrdiff_t(share * double(share < 0 ? below : most - least));
     context.set_memory_limit(limit);
     INFO("limit " << limit << " bytes, peak " << peak << ", global counter's peak " << floor << ", share " << share);
     // Steps after the first reuse what it kept, and may register differently.
