@@ -102,6 +102,8 @@ DetectorOptions detector_options(const MeasureOptions& o)
   return options;
 }
 
+bool uploads_ahead(const MeasureOptions& o) { return o.repeat == 1 && !o.no_upload_ahead; }
+
 void check(const MeasureOptions& o)
 {
   check_option("--tolerance", o.tolerance, option_ranges::tolerance);
@@ -155,8 +157,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   // unknown (NaN; null in JSON).
   const bool timed = context.device().profiling_timer && !o.no_profile;
   const double unknown = std::numeric_limits<double>::quiet_NaN();
-  // Steps in a row upload the next one's ends while a step runs.
-  const bool ahead = o.repeat == 1 && !o.no_upload_ahead;
+  const bool ahead = uploads_ahead(o);
   std::optional<Step> next;
   for (std::size_t frame = first; frame < last; ++frame) {
     const Step step = next ? std::move(*next) : load_step(scene, frame);

@@ -48,6 +48,9 @@ void add_measure_options(CLI::App& command, MeasureOptions& o);
 // Checks them (InputError naming the flag), without reading the scene.
 void check(const MeasureOptions& o);
 DetectorOptions detector_options(const MeasureOptions& o);
+// Whether each step's positions upload while the step before runs: steps in a row (no
+// repeats), unless --no-upload-ahead.
+bool uploads_ahead(const MeasureOptions& o);
 
 double median(std::vector<double> v);
 

@@ -52,7 +52,7 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
     std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
                 median(report.device_ms));
   std::printf("uploads   %.3f ms per step with its positions' uploads (%s)\n", median(report.step_ms),
-              o.repeat == 1 && !o.no_upload_ahead ? "made while the step before ran" : "made before it");
+              uploads_ahead(o) ? "made while the step before ran" : "made before it");
   std::printf("memory    %.1f MiB on the device at most (during a step)\n", double(report.peak_bytes) / (1 << 20));
 }
 
