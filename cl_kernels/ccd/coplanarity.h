@@ -17,11 +17,13 @@
 
 /* How far the search narrows the times: levels of eighths (2^-15 of the step in
  * double, 1/8 in single), and how many intervals it cuts into eighths before it keeps
- * the rest of the step whole. In single precision the cubic solver's guess
- * (refine.cl) already prunes most late boxes, and a deeper search costs more than it
- * saves (H200, device ms, single at 1/8 (1 cut) / 1/64 (2 cuts) / 1/64 (4 cuts):
- * cloth-ball 2.95 / 2.97 / 2.92, n-body 3.66 / 3.71 / 3.78); in double it saves most of
- * the refinement (16 cuts: cloth-ball 2.59 ms, 8: 2.82, 24: 2.63). */
+ * the rest of the step whole. In double it saves most of the refinement (16 cuts:
+ * cloth-ball 2.59 ms, 8: 2.82, 24: 2.63). In single precision a deeper search costs more
+ * than it saves: with inputs rounded to float, whose late boxes the cubic solver's guess
+ * (refine.cl) prunes (H200, device ms, at 1/8 (1 cut) / 1/64 (2 cuts) / 1/64 (4 cuts):
+ * cloth-ball 2.95 / 2.97 / 2.92, n-body 3.66 / 3.71 / 3.78), and with floats taken as the
+ * exact input (H100, at 1/8 / 1/64 (4 cuts) / 1/512 (16 cuts): cloth-ball 2.40 / 2.31 /
+ * 2.34, n-body 3.42 / 3.50 / 3.71, cloth-funnel 0.59 / 0.61 / 0.62). */
 #if CS_REAL_DOUBLE
 #define CS_COPLANAR_LEVELS 5
 #define CS_COPLANAR_TRIES 16

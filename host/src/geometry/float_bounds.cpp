@@ -62,10 +62,16 @@ void check_float_positions(const std::vector<Vec3>& x)
         throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
 }
 
-void round_to_float(const std::vector<Vec3>& x, float* out)
+bool round_to_float(const std::vector<Vec3>& x, float* out)
 {
+  bool exact = true;
   for (std::size_t i = 0; i < x.size(); ++i)
-    for (int k = 0; k < 3; ++k) out[3 * i + std::size_t(k)] = static_cast<float>(x[i][k]);
+    for (int k = 0; k < 3; ++k) {
+      const float f = static_cast<float>(x[i][k]);
+      out[3 * i + std::size_t(k)] = f;
+      exact &= double(f) == x[i][k];
+    }
+  return exact;
 }
 
 std::vector<float> to_float_positions(const std::vector<Vec3>& x)

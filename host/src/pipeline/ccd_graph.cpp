@@ -204,16 +204,14 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePa
 
 namespace {
 
-// Positions, topology and exactness, which every kernel over queries takes after its
-// queries.
+// Positions, topology and whether the positions are the exact input, which every kernel
+// over queries takes after its queries: double positions always are, float ones where
+// the step's parameter says so.
 runtime::PassSpec& geometry_args(runtime::PassSpec& pass, const TestInputs& in, Precision precision)
 {
   using namespace runtime;
-  return pass.arg(buffer_of(in.x0))
-      .arg(buffer_of(in.x1))
-      .arg(buffer_of(in.faces))
-      .arg(buffer_of(in.edges))
-      .arg(value_of(cl_uint(precision == Precision::double_)));
+  pass.arg(buffer_of(in.x0)).arg(buffer_of(in.x1)).arg(buffer_of(in.faces)).arg(buffer_of(in.edges));
+  return precision == Precision::double_ ? pass.arg(value_of(cl_uint(1))) : pass.arg(param_of(in.exact_floats));
 }
 
 // A pass over every candidate (or contact) stream of a step in one launch
@@ -366,6 +364,7 @@ struct GraphBuilder {
     s.x0 = g.fixed("x0", 12, nv);
     s.x1 = g.fixed("x1", 12, nv);
     s.x_next = g.fixed("x next", 12, 0);
+    s.exact_floats = g.param("positions are floats", 4);
     if (exact_input) {
       s.x0_double = g.fixed("x0 double", 24, nv);
       s.x1_double = g.fixed("x1 double", 24, nv);
@@ -523,6 +522,7 @@ struct GraphBuilder {
     in.x1 = exact_input ? s.x1_double : s.x1;
     in.x0_float = s.x0;
     in.x1_float = s.x1;
+    in.exact_floats = s.exact_floats;
     in.faces = s.faces;
     in.edges = s.edges;
     in.candidates = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};

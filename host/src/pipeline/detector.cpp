@@ -100,7 +100,7 @@ struct Detector::State {
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});
-    upload_scene(*scheduler, streams, layout, scene, options.solver.min_separation);
+    start_exact = end_exact = upload_scene(*scheduler, streams, layout, scene, options.solver.min_separation);
     if (!has(streams.front)) return;
     front.install(*scheduler, streams, seeds);
   }
@@ -117,6 +117,9 @@ struct Detector::State {
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
   ContactSpan contacts;  // in the readback's host memory
+  // Per object, whether its positions at the step's start and end are floats: where all
+  // are, the step's float kernels take them as the exact input (CcdStreams::exact_floats).
+  std::vector<bool> start_exact, end_exact;
   // Positions uploaded ahead (upload_ahead): the callers' positions, uploaded when the
   // next step starts by a task of their own through pinned copies; the uploads of the
   // step that runs (their events, once the task is done) and of the last one (which
@@ -124,7 +127,11 @@ struct Detector::State {
   struct Ahead {
     runtime::HostStaging single, exact;
     std::vector<const std::vector<Vec3>*> ends;  // per object; null: none
-    std::future<std::vector<runtime::Handle<cl_event>>> uploading;
+    struct Uploads {
+      std::vector<runtime::Handle<cl_event>> events;
+      std::vector<bool> floats;  // per object given positions: whether they are floats
+    };
+    std::future<Uploads> uploading;
     std::vector<runtime::Handle<cl_event>> taken;
     runtime::Handle<cl_event> free;
   } ahead;
@@ -175,19 +182,21 @@ struct Detector::State {
     const runtime::Buffer exact =
         has(streams.x_next_double) ? scheduler->buffer(streams.x_next_double) : runtime::Buffer();
     ahead.uploading = std::async(std::launch::async, [this, single, exact] {
-      std::vector<runtime::Handle<cl_event>> uploads;
+      Ahead::Uploads uploads;
+      uploads.floats.assign(ahead.ends.size(), false);
       for (std::uint32_t o = 0; o < ahead.ends.size(); ++o) {
         const std::vector<Vec3>* x = ahead.ends[o];
         if (!x) continue;
         const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex;
         float* rounded = static_cast<float*>(ahead.single.data()) + 3 * first;
-        round_to_float(*x, rounded);
+        uploads.floats[o] = round_to_float(*x, rounded);
         const std::size_t vertex = 3 * sizeof(float);
-        uploads.push_back(context.write_ahead(single, rounded, x->size() * vertex, first * vertex, ahead.free));
+        uploads.events.push_back(context.write_ahead(single, rounded, x->size() * vertex, first * vertex, ahead.free));
         if (!exact) continue;
         Vec3* copy = static_cast<Vec3*>(ahead.exact.data()) + first;
         std::copy(x->begin(), x->end(), copy);
-        uploads.push_back(context.write_ahead(exact, copy, x->size() * sizeof(Vec3), first * sizeof(Vec3), ahead.free));
+        uploads.events.push_back(
+            context.write_ahead(exact, copy, x->size() * sizeof(Vec3), first * sizeof(Vec3), ahead.free));
       }
       return uploads;
     });
@@ -199,8 +208,10 @@ struct Detector::State {
   {
     if (!ahead.uploading.valid()) return;
     runtime::Scheduler& q = *scheduler;
-    std::vector<runtime::Handle<cl_event>> uploads = ahead.uploading.get();
-    context.wait_for(uploads);
+    Ahead::Uploads uploads = ahead.uploading.get();
+    context.wait_for(uploads.events);
+    for (std::uint32_t o = 0; o < ahead.ends.size(); ++o)
+      if (ahead.ends[o]) end_exact[o] = uploads.floats[o];
     for (const ObjectSlot& slot : layout.slots) {
       if (!slot.moving || ahead.ends[slot.object]) continue;
       const std::size_t count = scene.objects[slot.object].positions.size();
@@ -212,7 +223,7 @@ struct Detector::State {
     if (has(streams.x_next_double)) q.swap(streams.x1_double, streams.x_next_double);
     // The next uploads go to the buffer the step's end was in, once nothing reads it.
     ahead.free = context.marker();
-    ahead.taken = std::move(uploads);
+    ahead.taken = std::move(uploads.events);
     std::fill(ahead.ends.begin(), ahead.ends.end(), nullptr);
   }
 
@@ -265,18 +276,23 @@ void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
 {
   State& s = *state_;
   s.check_usable();
-  const auto f = checked_positions(s.scene, object, end);
-  s.guarded([&] { write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f, end); });
+  const FloatPositions f = checked_positions(s.scene, object, end);
+  s.guarded([&] {
+    write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f, end);
+    s.end_exact[object] = f.exact;
+  });
 }
 
 void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
 {
   State& s = *state_;
   s.check_usable();
-  const auto f0 = checked_positions(s.scene, object, start), f1 = checked_positions(s.scene, object, end);
+  const FloatPositions f0 = checked_positions(s.scene, object, start), f1 = checked_positions(s.scene, object, end);
   s.guarded([&] {
     write_positions(*s.scheduler, s.layout, s.streams.x0, s.streams.x0_double, object, f0, start);
     write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f1, end);
+    s.start_exact[object] = f0.exact;
+    s.end_exact[object] = f1.exact;
   });
 }
 
@@ -305,12 +321,15 @@ void Detector::run_step(Report report)
   s.start_uploads_ahead();
   const CcdStreams& st = s.streams;
   if (has(st.object_contacts)) s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
+  const auto all = [](const std::vector<bool>& v) { return std::find(v.begin(), v.end(), false) == v.end(); };
+  s.scheduler->set(st.exact_floats, cl_uint(all(s.start_exact) && all(s.end_exact)));
   s.stats.front_retries = s.front.run(*s.scheduler, st);
   runtime::Scheduler& q = *s.scheduler;
   if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);
   // The end of this step starts the next one.
   q.copy(st.x1, 0, st.x0, 0, s.layout.moving_vertices);
   if (has(st.x1_double)) q.copy(st.x1_double, 0, st.x0_double, 0, s.layout.moving_vertices);
+  s.start_exact = s.end_exact;
 
   DetectorStats& stats = s.stats;
   stats.run = q.stats();

@@ -57,6 +57,7 @@ struct DeviceSolver::Graph {
     in.x1 = g.fixed("x1", 3 * real_bytes, 0);
     in.faces = g.fixed("faces", 12, 0);
     in.edges = g.fixed("edges", 8, 0);
+    in.exact_floats = g.param("queries are floats", 4);
     pairs = g.fixed("queries", 8, 0);
     culled = g.fixed("culled by the filter", 4, 0);
     in.candidates = {{pairs, kind}};
@@ -71,6 +72,7 @@ struct DeviceSolver::Graph {
       contacts.push_back(c.first);
     x0 = in.x0;
     x1 = in.x1;
+    exact_floats = in.exact_floats;
     faces = in.faces;
     edges = in.edges;
     scheduler = std::make_unique<Scheduler>(context, std::move(g));
@@ -78,24 +80,32 @@ struct DeviceSolver::Graph {
 
   ContactKind kind;
   runtime::StreamId x0, x1, faces, edges, pairs, culled;
+  runtime::ParamId exact_floats;
   std::vector<runtime::StreamId> contacts;
   std::unique_ptr<runtime::Scheduler> scheduler;
 };
 
 namespace {
 
-template <class Real> void upload_points(runtime::Scheduler& s, runtime::StreamId x0, runtime::StreamId x1,
+// Returns whether rounding to Real changed no coordinate.
+template <class Real> bool upload_points(runtime::Scheduler& s, runtime::StreamId x0, runtime::StreamId x1,
                                          const std::vector<Query>& queries)
 {
   std::vector<Real> start, end;
   start.reserve(queries.size() * 12);
   end.reserve(queries.size() * 12);
+  bool exact = true;
   for (const auto& q : queries)
     for (int i = 0; i < 8; ++i)
-      for (int k = 0; k < 3; ++k) (i < 4 ? start : end).push_back(static_cast<Real>(q[i][k]));  // round to nearest
+      for (int k = 0; k < 3; ++k) {
+        const Real r = static_cast<Real>(q[i][k]);  // round to nearest
+        (i < 4 ? start : end).push_back(r);
+        exact &= double(r) == q[i][k];
+      }
   // Three reals a point.
   s.upload(x0, start.data(), start.size() / 3);
   s.upload(x1, end.data(), end.size() / 3);
+  return exact;
 }
 
 }  // namespace
@@ -155,7 +165,7 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
                                                 : std::array<std::uint32_t, 2>{2 * i, 2 * i + 1};
   }
   if (dp) upload_points<double>(s, g.x0, g.x1, queries);
-  else upload_points<float>(s, g.x0, g.x1, queries);
+  else s.set(g.exact_floats, cl_uint(upload_points<float>(s, g.x0, g.x1, queries)));
   s.upload(g.faces, faces);
   s.upload(g.edges, edges);
   s.upload(g.pairs, pairs);

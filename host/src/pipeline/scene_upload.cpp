@@ -12,6 +12,14 @@ namespace {
 
 bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 
+FloatPositions rounded_positions(const std::vector<Vec3>& x)
+{
+  FloatPositions f;
+  f.rounded.resize(3 * x.size());
+  f.exact = round_to_float(x, f.rounded.data());
+  return f;
+}
+
 }  // namespace
 
 void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
@@ -30,26 +38,25 @@ void check_positions(const SceneDescription& scene, std::uint32_t o, const std::
   }
 }
 
-std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+FloatPositions checked_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
 {
   check_positions(scene, o, x);
-  std::vector<float> rounded(3 * x.size());
-  round_to_float(x, rounded.data());
-  return rounded;
+  return rounded_positions(x);
 }
 
 void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
-                     runtime::StreamId exact, std::uint32_t o, const std::vector<float>& rounded,
+                     runtime::StreamId exact, std::uint32_t o, const FloatPositions& rounded,
                      const std::vector<Vec3>& x)
 {
   const std::uint32_t first = layout.slots[layout.slot_of[o]].first_vertex;
-  scheduler.write(single, first, rounded.data(), x.size());
+  scheduler.write(single, first, rounded.rounded.data(), x.size());
   if (has(exact)) scheduler.write(exact, first, x.data(), x.size());
 }
 
-void upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout& layout, const SceneDescription& scene,
-                  double min_separation)
+std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout& layout,
+                               const SceneDescription& scene, double min_separation)
 {
+  std::vector<bool> exact(scene.objects.size());
   const Topology& t = layout.topology;
   q.write(s.faces, 0, t.faces.data(), t.faces.size());
   q.write(s.edges, 0, t.edges.data(), t.edges.size());
@@ -58,7 +65,9 @@ void upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout&
   for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
     const ObjectDescription& object = scene.objects[o];
     const std::vector<Vec3>& x = object.positions;
-    const auto f = to_float_positions(x);
+    // make_layout checked them.
+    const FloatPositions f = rounded_positions(x);
+    exact[o] = f.exact;
     write_positions(q, layout, s.x0, s.x0_double, o, f, x);
     write_positions(q, layout, s.x1, s.x1_double, o, f, x);
     const ObjectSlot& sl = layout.slots[layout.slot_of[o]];
@@ -71,13 +80,14 @@ void upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout&
     q.write(s.vertex_boxes, sl.first_vertex, b.vertices.data(), b.vertices.size());
     q.write(s.node_boxes, sl.first_node, b.nodes.data(), b.nodes.size());
   }
-  if (!has(s.front)) return;
+  if (!has(s.front)) return exact;
   q.write(s.face_edges, 0, t.face_edges.data(), t.face_edges.size());
   const std::vector<std::uint32_t> owned(t.owned.begin(), t.owned.end());
   q.write(s.owned, 0, owned.data(), owned.size());
   if (has(s.orphan_vf)) q.write(s.orphan_vf, 0, layout.orphans.vf.data(), layout.orphans.vf.size());
   if (has(s.orphan_ee)) q.write(s.orphan_ee, 0, layout.orphans.ee.data(), layout.orphans.ee.size());
   q.write(s.vertex_object, 0, layout.vertex_object.data(), layout.vertex_object.size());
+  return exact;
 }
 
 }  // namespace cstreams

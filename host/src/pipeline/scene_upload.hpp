@@ -10,19 +10,27 @@
 
 namespace cstreams {
 
+// One object's positions rounded to float, and whether that changed none of them.
+struct FloatPositions {
+  std::vector<float> rounded;
+  bool exact = false;
+};
+
 // Writes everything the graph reads that does not change from step to step, static
-// objects' bounds included (computed once by the host's float twin of the device).
-void upload_scene(runtime::Scheduler& scheduler, const CcdStreams& streams, const SceneLayout& layout,
-                  const SceneDescription& scene, double min_separation);
+// objects' bounds included (computed once by the host's float twin of the device), and
+// the positions the scene starts from. Returns whether each object's positions are
+// floats (FloatPositions::exact).
+std::vector<bool> upload_scene(runtime::Scheduler& scheduler, const CcdStreams& streams, const SceneLayout& layout,
+                               const SceneDescription& scene, double min_separation);
 
 // The checks a moving object's positions from a caller must pass (an InputError naming
 // the object), and the positions after them, rounded to float.
 void check_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
-std::vector<float> checked_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
+FloatPositions checked_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
 
 // Writes one object's positions to a float stream and, in double precision, its exact twin.
 void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
-                     runtime::StreamId exact, std::uint32_t object, const std::vector<float>& rounded,
+                     runtime::StreamId exact, std::uint32_t object, const FloatPositions& rounded,
                      const std::vector<Vec3>& x);
 
 }  // namespace cstreams

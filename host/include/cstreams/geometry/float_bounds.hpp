@@ -29,8 +29,10 @@ FloatBounds float_bounds(const Topology& topology, const Bvh& bvh, const std::ve
 
 // Rounds positions to float (an InputError for a non-finite or out-of-range one).
 std::vector<float> to_float_positions(const std::vector<Vec3>& x);
-// The two halves of that: the check, and the rounding to nearest (3 floats a vertex).
+// The two halves of that: the check, and the rounding to nearest (3 floats a vertex),
+// which returns whether every coordinate was a float already: single-precision
+// kernels then take the floats as the exact input (far tighter bounds).
 void check_float_positions(const std::vector<Vec3>& x);
-void round_to_float(const std::vector<Vec3>& x, float* out);
+bool round_to_float(const std::vector<Vec3>& x, float* out);
 
 }  // namespace cstreams

@@ -79,16 +79,20 @@ struct CcdStreams {
   runtime::StreamId object_contacts;  // refine.cl's `found`: per object, the earliest contact so far
   runtime::ParamId level_cap;
   runtime::ParamId earliest_only;     // 1: the step reports only each object's earliest time
+  runtime::ParamId exact_floats;      // 1: the float positions are the input itself (no rounding)
   std::vector<std::pair<runtime::StreamId, ContactKind>> contacts;  // one per candidate stream
 };
 
 // What the elementary tests read: positions (double ones in double precision),
 // topology, and the candidate streams with their kinds. In double precision, float
 // positions rounded to nearest (where there are some) let the conservative solver
-// screen in float first.
+// screen in float first. Float positions are bounded as within half an ulp of the input
+// unless the 4-byte exact_floats is nonzero: the input was floats, and the bounds are
+// far tighter.
 struct TestInputs {
   runtime::StreamId x0, x1, faces, edges;
   runtime::StreamId x0_float, x1_float;
+  runtime::ParamId exact_floats;
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
   // A scene of objects: every vertex's object, two words per object, and a 4-byte
   // parameter. Where the parameter is nonzero, the step reports only each object's
