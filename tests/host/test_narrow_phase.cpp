@@ -373,6 +373,24 @@ TEST_CASE("queries with NaN, infinite or (in single precision) too large coordin
   CHECK_THROWS_WITH(solver.solve(ContactKind::vertex_face, {q}), Catch::Contains("too large for the single-precision"));
 }
 
+// Single precision takes queries whose coordinates are all floats as the exact input
+// (the solver checks that rounding changed none): a vertex one ulp above a face far from
+// the origin passes it. Moved by 2^-40, under half an ulp, the same coordinates round to
+// the same floats but are bounded within half an ulp, which reaches the face: the
+// conservative answer is then a contact.
+TEST_CASE("in single precision, queries given in floats are solved as given", "[narrow][quick]")
+{
+  const Vec3 far(1024, 1024, 1024), in(0.25, 0.25, 0), above(0, 0, 0x1p-13);  // an ulp at 1024
+  const Query floats = query({far + in + above, far + A, far + B, far + C},
+                             {far + in + above + Vec3(0.125, 0, 0), far + A, far + B, far + C});
+  Query rounded = floats;
+  rounded[0].z() += 0x1p-40;
+  rounded[4].z() += 0x1p-40;
+  DeviceSolver solver(cstreams::test::device(), conservative(Precision::single));
+  CHECK_FALSE(solver.solve(ContactKind::vertex_face, {floats})[0].collides());
+  CHECK(solver.solve(ContactKind::vertex_face, {rounded})[0].collides());
+}
+
 TEST_CASE("a minimum separation makes near misses collide", "[narrow][quick]")
 {
   const Vec3 in(0.25, 0.25, 0);
