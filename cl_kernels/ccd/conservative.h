@@ -5,7 +5,8 @@
  * The contact function F(t, u, v) is bounded over boxes of parameters by bounds that
  * hold for the exact inputs (trilinear.h). A box is dropped when the bounds keep F
  * away from zero along the coordinate axes, along F at the box centre, or along the
- * face (or edge pair) normal; it is a contact when they fit within the tolerance, or
+ * face (or edge pair) normal; it is a contact when they fit within the tolerance,
+ * when F vanishes at its first corner to within 2^-10 of the tolerance, or
  * within the minimum separation everywhere (every point of it is then a contact) or
  * at a corner at its start time (a contact right at its start), or at a corner at its
  * end time when it is no longer than the tolerance in time; otherwise it is narrowed
@@ -97,6 +98,18 @@ inline int cs_box_halved(const cs_box a, const cs_box b)
          b.v1 - b.v0 < (real)0.5 * (a.v1 - a.v0);
 }
 
+/* Whether F vanishes at (t, u, v) as far as its bounds there can tell, to within
+ * `within` (co-domain units) in every coordinate. */
+inline int cs_vanishes_at(const cs_trilinear* f, const real t, const real u, const real v, const real within)
+{
+  for (int k = 0; k < 3; ++k) {
+    real error;
+    const real value = cs_trilinear_at(f, k, t, u, v, &error);
+    if (!(cs_up(fabs(value) + error) <= within)) return 0;
+  }
+  return 1;
+}
+
 /* best: the earliest contact so far (2 for none). out_of_work: the query's work limit
  * is reached, so a box that is not dropped is a contact (*limited set). *slack is set
  * when the tolerance cut the search short. A box to refine is halved once (*lo, *hi),
@@ -121,6 +134,11 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
   if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, spread)) return CS_BOX_DROP;
   *hit = b.t0;
   if (width <= tol) return CS_BOX_HIT;
+  /* A contact at its first corner, where F vanishes to within 2^-10 of the
+   * tolerance: features that touch exactly there (a vertex on a vertex it duplicates, a
+   * point of one edge on the other) would otherwise be closed in on by halving, a round
+   * a halving, until a box around the corner fits within the tolerance. */
+  if (cs_vanishes_at(f, b.t0, b.u0, b.v0, tol * (real)0x1p-10)) return CS_BOX_HIT;
   if (separation > 0) {
     /* |F_k| under separation / sqrt(3) for every k keeps |F| under separation. */
     const real within = separation * (real)0.57735;

@@ -373,6 +373,26 @@ TEST_CASE("queries with NaN, infinite or (in single precision) too large coordin
   CHECK_THROWS_WITH(solver.solve(ContactKind::vertex_face, {q}), Catch::Contains("too large for the single-precision"));
 }
 
+// Features that coincide (a mesh's duplicated vertex on the face it duplicates a
+// vertex of, an edge on an edge it duplicates) touch for the whole step: a contact at
+// 0, which the refinement finds at the first corner of its first box.
+TEST_CASE("features that coincide touch at time 0", "[narrow][quick]")
+{
+  const Vec3 move(0.25, -0.125, 0.5);
+  const Query on_vertex = query({A, A, B, C}, {A + move, A + move, B + move, C + move});
+  const Query on_edge = query({A, B, A, B}, {A + move, B + move, A + move, B + move});
+  for (Precision p : precisions()) {
+    INFO(to_string(p));
+    DeviceSolver solver(cstreams::test::device(), conservative(p));
+    const auto vf = solver.solve(ContactKind::vertex_face, {on_vertex});
+    const auto ee = solver.solve(ContactKind::edge_edge, {on_edge});
+    REQUIRE(vf[0].collides());
+    REQUIRE(ee[0].collides());
+    CHECK(vf[0].toi == 0);
+    CHECK(ee[0].toi == 0);
+  }
+}
+
 // Single precision takes queries whose coordinates are all floats as the exact input
 // (the solver checks that rounding changed none): a vertex one ulp above a face far from
 // the origin passes it. Moved by 2^-40, under half an ulp, the same coordinates round to
