@@ -373,9 +373,9 @@ TEST_CASE("queries with NaN, infinite or (in single precision) too large coordin
   CHECK_THROWS_WITH(solver.solve(ContactKind::vertex_face, {q}), Catch::Contains("too large for the single-precision"));
 }
 
-// Features that coincide (a mesh's duplicated vertex on the face it duplicates a
-// vertex of, an edge on an edge it duplicates) touch for the whole step: a contact at
-// 0, which the refinement finds at the first corner of its first box.
+// Features that coincide for the whole step (a duplicated vertex against a face whose
+// first vertex it duplicates, an edge against its duplicate) touch at 0, which the
+// refinement finds at the first corner of its first box.
 TEST_CASE("features that coincide touch at time 0", "[narrow][quick]")
 {
   const Vec3 move(0.25, -0.125, 0.5);
