@@ -24,6 +24,34 @@ inline real cs_entry(const real m[3][3], const int r, const int c)
   return r == 0 ? r0 : r == 1 ? r1 : r2;
 }
 
+/* Y inverting J's largest 2 x 2 block, in two coordinates and two parameters, and
+ * leaving the third parameter alone: K still holds every zero, that parameter's reach
+ * entering through (I - Y J)(X - c). The block left after taking out row k and column i
+ * of J has determinant (-1)^(k + i) cof[k][i]. Returns 0 where every block is singular. */
+inline int cs_block_inverse(const real jm[3][3], const real cof[3][3], real y[3][3])
+{
+  int skip = 0, free = 0;
+  real largest = -1;
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 3; ++i)
+      if (fabs(cof[k][i]) > largest) {
+        largest = fabs(cof[k][i]);
+        skip = k;
+        free = i;
+      }
+  const real minor = cs_entry(cof, skip, free);
+  if (!(fabs(minor) > CS_TINY) || !isfinite(minor)) return 0;
+  const int k1 = skip == 0 ? 1 : 0, k2 = skip == 2 ? 1 : 2, p1 = free == 0 ? 1 : 0, p2 = free == 2 ? 1 : 2;
+  const real inverse = ((skip + free) % 2 ? (real)-1 : (real)1) / minor;
+  const real a = cs_entry(jm, k1, p1), b = cs_entry(jm, k1, p2), c = cs_entry(jm, k2, p1), d = cs_entry(jm, k2, p2);
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      y[i][k] = i == p1   ? (k == k1 ? d : k == k2 ? -b : (real)0) * inverse
+                : i == p2 ? (k == k1 ? -c : k == k2 ? a : (real)0) * inverse
+                          : (real)0;
+  return 1;
+}
+
 /* Narrows *b to its intersection with K. Returns 0 when that is empty: F misses S on
  * the box. */
 inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real separation)
@@ -59,74 +87,62 @@ inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real se
                           {jm[0][1] * jm[1][2] - jm[0][2] * jm[1][1], jm[0][2] * jm[1][0] - jm[0][0] * jm[1][2],
                            jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0]}};
   const real det = jm[0][0] * cof[0][0] + jm[0][1] * cof[0][1] + jm[0][2] * cof[0][2];
+  /* Y is J's inverse where J has one. Where J is singular (F does not vary along some
+   * parameter: features that move together; or along some coordinate: a query in a
+   * plane of the axes), or where that inverse narrows nothing (J nearly singular, as for
+   * nearly parallel edges, whose inverse magnifies every error), Y inverts J's largest
+   * 2 x 2 block instead (cs_block_inverse). Cloth-funnel in double: 17 rounds of
+   * refinement -> 7; cloth-ball 6 -> 3. (The block instead of the inverse wherever J is
+   * nearly singular gave up narrowing the inverse did: more rounds, false positives.) */
   real y[3][3];
-  if (fabs(det) > CS_TINY && isfinite(det)) {
+  int whole = fabs(det) > CS_TINY && isfinite(det);
+  if (whole) {
     const real inverse = (real)1 / det;
     for (int i = 0; i < 3; ++i)
       for (int k = 0; k < 3; ++k) y[i][k] = cof[k][i] * inverse;
-  } else {
-    /* J is singular: F does not vary along some parameter (features that move
-     * together) or along some coordinate (a query in a plane of the axes). Y then
-     * inverts J's largest 2 x 2 block, in two coordinates and two parameters, and leaves
-     * the third parameter alone: K still holds every zero, that parameter's reach
-     * entering through (I - Y J)(X - c). The block left after taking out row k and column
-     * i has determinant (-1)^(k + i) cof[k][i]. Cloth-funnel in double: 17 rounds of
-     * refinement -> 7; cloth-ball: 6 -> 3. (Taking a block also where J is only nearly
-     * singular gave up narrowing the 3 x 3 inverse did: more rounds and false positives.) */
-    int skip = 0, free = 0;
-    real largest = -1;
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i)
-        if (fabs(cof[k][i]) > largest) {
-          largest = fabs(cof[k][i]);
-          skip = k;
-          free = i;
-        }
-    const real minor = cs_entry(cof, skip, free);
-    if (!(fabs(minor) > CS_TINY) || !isfinite(minor)) return 1; /* no useful Y: the box stays as it is */
-    const int k1 = skip == 0 ? 1 : 0, k2 = skip == 2 ? 1 : 2, p1 = free == 0 ? 1 : 0, p2 = free == 2 ? 1 : 2;
-    const real inverse = ((skip + free) % 2 ? (real)-1 : (real)1) / minor;
-    const real a = cs_entry(jm, k1, p1), b = cs_entry(jm, k1, p2), c = cs_entry(jm, k2, p1), d = cs_entry(jm, k2, p2);
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < 3; ++k)
-        y[i][k] = i == p1   ? (k == k1 ? d : k == k2 ? -b : (real)0) * inverse
-                  : i == p2 ? (k == k1 ? -c : k == k2 ? a : (real)0) * inverse
-                            : (real)0;
+  } else if (!cs_block_inverse(jm, cof, y)) {
+    return 1; /* no useful Y: the box stays as it is */
   }
 
   real narrow_lo[3], narrow_hi[3];
-  for (int i = 0; i < 3; ++i) {
-    /* (I - Y J)(X - c) over a box symmetric about c: |I - Y J| row i times the radii.
-     * Each entry is its computed middle, within 8 CS_EPS of the size of its terms,
-     * plus |Y| times J's radii. */
-    real spread = 0;
-    for (int j = 0; j < 3; ++j) {
-      real entry = i == j ? (real)1 : (real)0, size = entry, reach = 0;
-      for (int k = 0; k < 3; ++k) {
-        const real p = y[i][k] * jm[k][j];
-        entry -= p;
-        size += fabs(p);
-        reach += fabs(y[i][k]) * jr[k][j];
+  for (;;) {
+    for (int i = 0; i < 3; ++i) {
+      /* (I - Y J)(X - c) over a box symmetric about c: |I - Y J| row i times the radii.
+       * Each entry is its computed middle, within 8 CS_EPS of the size of its terms,
+       * plus |Y| times J's radii. */
+      real spread = 0;
+      for (int j = 0; j < 3; ++j) {
+        real entry = i == j ? (real)1 : (real)0, size = entry, reach = 0;
+        for (int k = 0; k < 3; ++k) {
+          const real p = y[i][k] * jm[k][j];
+          entry -= p;
+          size += fabs(p);
+          reach += fabs(y[i][k]) * jr[k][j];
+        }
+        spread += (fabs(entry) + reach + (real)8 * CS_EPS * size) * rad[j];
       }
-      spread += (fabs(entry) + reach + (real)8 * CS_EPS * size) * rad[j];
+      real step = 0, step_size = 0, step_reach = 0;
+      for (int k = 0; k < 3; ++k) {
+        const real p = y[i][k] * fm[k];
+        step += p;
+        step_size += fabs(p);
+        step_reach += fabs(y[i][k]) * fr[k];
+      }
+      const real at = mid[i] - step;
+      const real radius =
+          (spread + step_reach + (real)8 * CS_EPS * step_size + (real)2 * CS_EPS * fabs(at)) * grow + (real)64 * CS_TINY;
+      const real k_lo = cs_down(at - radius), k_hi = cs_up(at + radius);
+      narrow_lo[i] = lo[i];
+      narrow_hi[i] = hi[i];
+      if (!isfinite(k_lo) || !isfinite(k_hi)) continue; /* Y too large to say anything along i */
+      narrow_lo[i] = fmax(lo[i], k_lo);
+      narrow_hi[i] = fmin(hi[i], k_hi);
+      if (narrow_lo[i] > narrow_hi[i]) return 0;
     }
-    real step = 0, step_size = 0, step_reach = 0;
-    for (int k = 0; k < 3; ++k) {
-      const real p = y[i][k] * fm[k];
-      step += p;
-      step_size += fabs(p);
-      step_reach += fabs(y[i][k]) * fr[k];
-    }
-    const real at = mid[i] - step;
-    const real radius =
-        (spread + step_reach + (real)8 * CS_EPS * step_size + (real)2 * CS_EPS * fabs(at)) * grow + (real)64 * CS_TINY;
-    const real k_lo = cs_down(at - radius), k_hi = cs_up(at + radius);
-    narrow_lo[i] = lo[i];
-    narrow_hi[i] = hi[i];
-    if (!isfinite(k_lo) || !isfinite(k_hi)) continue; /* Y too large to say anything along i */
-    narrow_lo[i] = fmax(lo[i], k_lo);
-    narrow_hi[i] = fmin(hi[i], k_hi);
-    if (narrow_lo[i] > narrow_hi[i]) return 0;
+    const int narrowed = narrow_lo[0] > lo[0] || narrow_hi[0] < hi[0] || narrow_lo[1] > lo[1] || narrow_hi[1] < hi[1] ||
+                         narrow_lo[2] > lo[2] || narrow_hi[2] < hi[2];
+    if (narrowed || !whole || !cs_block_inverse(jm, cof, y)) break;
+    whole = 0;
   }
   *b = cs_box_of(narrow_lo, narrow_hi);
   return 1;
