@@ -74,12 +74,18 @@ bool round_to_float(const std::vector<Vec3>& x, float* out)
   return exact;
 }
 
+FloatPositions rounded_positions(const std::vector<Vec3>& x)
+{
+  FloatPositions f;
+  f.rounded.resize(3 * x.size());
+  f.exact = round_to_float(x, f.rounded.data());
+  return f;
+}
+
 std::vector<float> to_float_positions(const std::vector<Vec3>& x)
 {
   check_float_positions(x);
-  std::vector<float> out(3 * x.size());
-  round_to_float(x, out.data());
-  return out;
+  return rounded_positions(x).rounded;
 }
 
 namespace {

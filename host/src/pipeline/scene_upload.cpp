@@ -12,14 +12,6 @@ namespace {
 
 bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 
-FloatPositions rounded_positions(const std::vector<Vec3>& x)
-{
-  FloatPositions f;
-  f.rounded.resize(3 * x.size());
-  f.exact = round_to_float(x, f.rounded.data());
-  return f;
-}
-
 }  // namespace
 
 void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)

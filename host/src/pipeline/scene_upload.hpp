@@ -2,6 +2,7 @@
 // What the host writes into a scene's streams: topology, trees and the positions the
 // scene starts from once, and each object's new positions per step.
 #include <cstreams/detector.hpp>
+#include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
@@ -9,12 +10,6 @@
 #include <vector>
 
 namespace cstreams {
-
-// One object's positions rounded to float, and whether that changed none of them.
-struct FloatPositions {
-  std::vector<float> rounded;
-  bool exact = false;
-};
 
 // Writes everything the graph reads that does not change from step to step, static
 // objects' bounds included (computed once by the host's float twin of the device), and

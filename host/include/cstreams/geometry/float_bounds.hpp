@@ -27,12 +27,19 @@ struct FloatBounds {
 FloatBounds float_bounds(const Topology& topology, const Bvh& bvh, const std::vector<Vec3>& x0,
                          const std::vector<Vec3>& x1, float separation);
 
+// Positions rounded to float (3 a vertex), and whether that changed none of them:
+// single-precision kernels then take the floats as the exact input (far tighter bounds).
+struct FloatPositions {
+  std::vector<float> rounded;
+  bool exact = false;
+};
+
 // Rounds positions to float (an InputError for a non-finite or out-of-range one).
 std::vector<float> to_float_positions(const std::vector<Vec3>& x);
-// The two halves of that: the check, and the rounding to nearest (3 floats a vertex),
-// which returns whether every coordinate was a float already: single-precision
-// kernels then take the floats as the exact input (far tighter bounds).
+// The halves of that: the check, and the rounding to nearest, into a new array or into
+// `out` (3 floats a vertex; returns FloatPositions::exact).
 void check_float_positions(const std::vector<Vec3>& x);
+FloatPositions rounded_positions(const std::vector<Vec3>& x);
 bool round_to_float(const std::vector<Vec3>& x, float* out);
 
 }  // namespace cstreams
