@@ -11,7 +11,9 @@
  * Rounds are synchronous per query: round r prunes with the earliest contact of rounds
  * before r and checks the work of rounds before r, never with what round r itself
  * finds. So a query's answer depends on nothing but the query: not on the device, the
- * launch size, the order of the list or the queries beside it. The state keeps both
+ * launch size, the order of the list, the queries beside it or the list's capacity (a
+ * round that overflowed runs again as a replay, runtime/worklist.h, which adds no
+ * splits twice and reads what the round read the first time). The state keeps both
  * halves of that: best[r % 2] gathers the earliest contact through round r while
  * round r reads best[(r + 1) % 2]; work[r % 3] counts round r's splits, and each item
  * carries its query's splits up to two rounds before.
@@ -320,6 +322,9 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
 {
   __local uint group[2];
   const uint items = cs_worklist_items(counts, round, capacity);
+  /* Everything else a round writes to the state is a minimum, an or or a store of what
+   * the replay stores again. */
+  const int replay = cs_worklist_replay(counts, round);
   const uint now = round % 2;
   for (uint base = get_group_id(0) * get_local_size(0); base < items; base += get_global_size(0)) {
     const uint i = base + get_local_id(0);
@@ -368,7 +373,7 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       s->work[(round + 1) % 3] = 0;
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
       if (visit >= CS_BOX_SPLIT) {
-        atomic_add(&s->work[round % 3], visit == CS_BOX_CUT ? cs_pieces(cuts) / 2 : 1u);
+        if (!replay) atomic_add(&s->work[round % 3], visit == CS_BOX_CUT ? cs_pieces(cuts) / 2 : 1u);
         lo.query = hi.query = it.query;
         lo.work = hi.work = work;
       }

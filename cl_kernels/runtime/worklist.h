@@ -16,7 +16,13 @@
  * counts[0]). Round r appends to counts[(r + 1) % 3] and clears counts[(r + 2) % 3],
  * which round r - 1 read and round r + 1 appends to, so no launch is needed between
  * rounds. An append past the capacity writes nothing and raises counts[3] to the
- * capacity it needed: the host grows the lists and starts the work again. For the
+ * capacity it needed. The round after one that overflowed finds more items than the
+ * lists hold: it and every round after it do nothing (counts[10] marks it), so the
+ * overflowing round's input stays whole. The host grows the lists, keeping that input,
+ * and runs the round again with counts[11] set to its number plus one: a replay, in
+ * which the round appends what it appended before and applies nothing twice (a round
+ * kernel asks cs_worklist_replay, and skips its updates of the state that are not
+ * idempotent). Where the seed overflowed, the host starts again from the seed. For the
  * host's statistics and its next batch, counts[4] and counts[5] add up the items of all
  * rounds (low and high word), counts[6] keeps the largest round and counts[7] the
  * number of rounds that had items.
@@ -27,18 +33,28 @@
  * loops were cut short all the same (counts[9] holds 1) and the host stops. */
 #include "loop_trips.h"
 
+inline int cs_worklist_replay(__global const uint* counts, const uint round) { return counts[11] == round + 1; }
+
 inline uint cs_worklist_items(__global uint* counts, const uint round, const uint capacity)
 {
   const uint n = counts[round % 3];
+  /* counts[10] is written only by a round that does nothing, so every work-item of a
+   * round reads the same. */
+  if (n > capacity || counts[10]) {
+    if (get_global_id(0) == 0 && !counts[10]) counts[10] = round + 1;
+    return 0;
+  }
   if (get_global_id(0) == 0) {
     counts[(round + 2) % 3] = 0;
-    const uint low = counts[4] + n;
-    if (low < n) ++counts[5];
-    counts[4] = low;
-    counts[6] = max(counts[6], n);
-    if (n) counts[7] = round + 1;
+    if (!cs_worklist_replay(counts, round)) {
+      const uint low = counts[4] + n;
+      if (low < n) ++counts[5];
+      counts[4] = low;
+      counts[6] = max(counts[6], n);
+      if (n) counts[7] = round + 1;
+    }
   }
-  return min(n, capacity);
+  return n;
 }
 
 /* One atomic a group on the global count: the group adds up its items first. */
@@ -63,7 +79,7 @@ inline int cs_worklist_fits(__global uint* counts, const uint capacity, const ui
 
 /* Where a seed writes a first item beyond its input's own list[i]: an index below the
  * capacity, or the capacity itself where the list is full (the host then grows it and
- * starts again, as after a round's overflow). */
+ * starts again from the seed). */
 inline uint cs_worklist_seed_index(__global uint* counts, const uint capacity)
 {
   const uint at = atomic_inc(&counts[0]);

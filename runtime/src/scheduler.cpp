@@ -73,7 +73,11 @@ constexpr std::uint64_t spill_per_group = 16;
 constexpr std::size_t most_merged_per_group = 64;
 
 // A work list's device side (Worklist in stream_graph.hpp).
-constexpr std::size_t list_words = 10;
+constexpr std::size_t list_words = 12;
+
+// Work lists and list states this small stay, however little a run needs: giving them
+// back would save nothing worth an allocation when the next run needs them again.
+constexpr std::size_t kept_list_bytes = std::size_t(1) << 16;
 
 struct ListState {
   Kernel seed, round;
@@ -613,9 +617,39 @@ struct Scheduler::State {
     l.capacity = items;
   }
 
+  // Grows the lists to `items`, keeping the first `kept` items of lists[keep]: the input
+  // of a round that overflowed. The other list goes back first and the kept one once
+  // copied, so no more is held at once than two lists of the new size.
+  void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigned keep, std::size_t kept)
+  {
+    Buffer input = std::move(l.lists[keep]);
+    l.capacity = 0;
+    l.lists[0] = l.lists[1] = Buffer();
+    with_memory([&] { l.lists[keep] = Buffer(context, items * item_bytes, "work list"); });
+    context.copy(input, l.lists[keep], kept * item_bytes, 0, 0, tl());
+    input = Buffer();
+    with_memory([&] { l.lists[1 - keep] = Buffer(context, items * item_bytes, "work list"); });
+    l.capacity = items;
+  }
+
+  // After a run's rounds (or a slice's, `widest` the most any round of the run held so
+  // far): lists more than twice what it needed (a burst that has passed) go back, and
+  // the next run takes lists of that size, so that a detector held for many steps holds
+  // what its steps need. Lists grow to no more than twice what their run needed, so a
+  // run like the last keeps them.
+  void keep_needed_lists(ListState& l, std::size_t widest, std::size_t item_bytes)
+  {
+    const std::size_t needed = grown(widest);
+    if (l.capacity <= 2 * needed || l.capacity * item_bytes <= kept_list_bytes) return;
+    l.lists[0] = l.lists[1] = Buffer();
+    l.capacity = 0;
+    l.released = needed;
+  }
+
   // Seeds the work list and runs its rounds until one leaves nothing, in batches
-  // between which the host reads the counts once. An overflow grows the lists to what
-  // the largest round asked for and starts again from the seed.
+  // between which the host reads the counts once. A round that overflows the lists runs
+  // again, as a replay (cl_kernels/runtime/worklist.h), once they have grown to what it
+  // asked for with its input kept; a seed that overflows starts again.
   void refine(PassState& p, std::size_t n)
   {
     const Worklist& w = *p.spec->worklist;
@@ -624,8 +658,14 @@ struct Scheduler::State {
     const std::size_t wg = context.work_group_size();
     const std::size_t round_group = w.round_group ? std::min(w.round_group, wg) : wg;
     const std::size_t state_bytes = w.state_bytes + (w.extra_state_bytes > 0 && nonzero(w.extra_state_while) ? w.extra_state_bytes : 0);
-    with_memory([&] { ensure_capacity(context, l.state, std::max<std::size_t>(n, 1) * state_bytes, "work list state"); });
-    if (n == 0) return;
+    const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
+    // A state far larger than this run's goes back too (keep_needed_lists).
+    if (l.state.bytes() > 2 * state_needed + kept_list_bytes) l.state = Buffer();
+    with_memory([&] { ensure_capacity(context, l.state, state_needed, "work list state"); });
+    if (n == 0) {
+      keep_needed_lists(l, 0, w.item_bytes);
+      return;
+    }
     // Lists taken by memory pressure come back at their size, not at one that the rounds
     // would overflow again.
     if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes);
@@ -636,24 +676,31 @@ struct Scheduler::State {
     // work-item, so that no work-item strides over many; the host reads the counts
     // after every round (such devices are CPUs, where a read costs little).
     const bool bounded_loops = context.loop_trip_limit() != 0;
-    for (;;) {
-      context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
-      context.fill_u32(l.counts, 0, 1, list_words - 2, tl());
-      context.fill_u32(l.counts, 1, list_words - 1, 1, tl());
-      unsigned a = bind_own_args(*p.spec, l.seed);
-      l.seed.set_arg(a++, l.state);
-      l.seed.set_arg(a++, l.lists[0]);
-      l.seed.set_arg(a++, l.counts);
-      l.seed.set_arg(a++, cl_uint(l.capacity));
-      context.launch(l.seed, round_up(n, round_group), round_group, tl(), label);
-      ++p.stats.launches;
-      std::uint32_t counts[list_words] = {std::uint32_t(n)};
-      // Rounds launched over exactly their items must know the seed's.
-      if (bounded_loops) {
-        context.read(l.counts, counts, sizeof counts, 0, tl());
-        ++stats.readbacks;
+    std::uint32_t counts[list_words];
+    unsigned round = 0, batch = 0, next_batch = 0;
+    for (bool seed = true;;) {
+      if (seed) {
+        seed = false;
+        context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
+        context.fill_u32(l.counts, 0, 1, list_words - 1, tl());
+        context.fill_u32(l.counts, 1, 9, 1, tl());
+        unsigned a = bind_own_args(*p.spec, l.seed);
+        l.seed.set_arg(a++, l.state);
+        l.seed.set_arg(a++, l.lists[0]);
+        l.seed.set_arg(a++, l.counts);
+        l.seed.set_arg(a++, cl_uint(l.capacity));
+        context.launch(l.seed, round_up(n, round_group), round_group, tl(), label);
+        ++p.stats.launches;
+        counts[0] = std::uint32_t(n);
+        // Rounds launched over exactly their items must know the seed's.
+        if (bounded_loops) {
+          context.read(l.counts, counts, sizeof counts, 0, tl());
+          ++stats.readbacks;
+        }
+        round = 0;
+        batch = bounded_loops ? 1 : std::max(l.rounds, 1u);
+        next_batch = 8;
       }
-      unsigned round = 0, batch = bounded_loops ? 1 : std::max(l.rounds, 1u), next_batch = 8;
       for (;;) {
         for (const unsigned last = round + batch; round < last; ++round) {
           unsigned r = bind_own_args(*p.spec, l.round);
@@ -686,11 +733,24 @@ struct Scheduler::State {
         p.stats.rounds += counts[7];
         p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
         p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
+        keep_needed_lists(l, p.stats.widest_list, w.item_bytes);
         return;
       }
-      // Rounds after the one that overflowed saw a cut list and asked for too little.
-      allocate_lists(l, std::max(grown(counts[3]), 2 * l.capacity), w.item_bytes);
       ++p.stats.reruns;
+      const std::size_t needed = std::max(grown(counts[3]), 2 * l.capacity);
+      // Rounds after the one that overflowed did nothing; where no round ran, the seed's
+      // own first items overflowed.
+      if (counts[7] == 0) {
+        allocate_lists(l, needed, w.item_bytes);
+        seed = true;
+        continue;
+      }
+      round = counts[7] - 1;
+      grow_lists(l, needed, w.item_bytes, round % 2, counts[round % 3]);
+      counts[(round + 1) % 3] = counts[3] = counts[10] = 0;
+      counts[11] = round + 1;
+      for (const std::size_t word : {std::size_t((round + 1) % 3), std::size_t(3), std::size_t(10), std::size_t(11)})
+        context.fill_u32(l.counts, counts[word], word, 1, tl());
     }
   }
 

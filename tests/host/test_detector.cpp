@@ -500,6 +500,54 @@ TEST_CASE("single precision takes positions that are floats as the input itself"
   CHECK(10 * floats.size() <= 11 * exact.size());
 }
 
+// A first step sizes the refinement's work lists from its queries, and the funnel's
+// late rounds outgrow them: the round that overflows runs again once they have grown
+// (a replay), and the step must refine exactly as one whose lists were large enough
+// from the start, the same step run again: the same boxes, rounds and contacts. A
+// quiet step after them needs far smaller lists, and holds no more.
+TEST_CASE("a refinement whose work list overflows goes on as one that never did", "[detector][quick]")
+{
+  const Scene funnel = cstreams::test::cloth_funnel();
+  {
+    // Double precision settles the funnel in rounds that fit its first lists; in single
+    // precision, positions that are not floats (moved by 2^-40) refine many more boxes.
+    const Vec3 shift(0x1p-40, 0, 0);
+    DetectorOptions options;
+    options.solver.precision = Precision::single;
+    Detector detector(cstreams::test::device(), describe(funnel, 0), options);
+    const auto refinement = [&] {
+      for (const auto& p : detector.stats().run.passes)
+        if (p.name == "refine open queries") return p;
+      FAIL("no refinement pass");
+      return runtime::PassStats();
+    };
+    std::vector<std::vector<Contact>> contacts;
+    std::vector<runtime::PassStats> refined;
+    for (int run = 0; run < 2; ++run) {
+      for (std::uint32_t o = 0; o < funnel.objects.size(); ++o)
+        if (funnel.objects[o].kind != ObjectKind::static_)
+          detector.set_step(o, shifted(funnel, o, 0, shift), shifted(funnel, o, 1, shift));
+      detector.detect();
+      contacts.push_back(detector.contacts());
+      refined.push_back(refinement());
+    }
+    CHECK(refined[0].reruns > 0);
+    CHECK(refined[1].reruns == 0);
+    CHECK(refined[0].list_items == refined[1].list_items);
+    CHECK(refined[0].rounds == refined[1].rounds);
+    CHECK(!contacts[0].empty());
+    CHECK(same({contacts[0]}, {contacts[1]}));
+    // A step at rest refines little: the lists grown for the funnel go back.
+    for (std::uint32_t o = 0; o < funnel.objects.size(); ++o)
+      if (funnel.objects[o].kind != ObjectKind::static_)
+        detector.set_step(o, funnel.positions(o, 0), funnel.positions(o, 0));
+    detector.detect();
+    INFO(refined[1].scratch_bytes << " bytes of work lists and state after the funnel's step, "
+                                  << refinement().scratch_bytes << " after one at rest");
+    CHECK(4 * refinement().scratch_bytes < refined[1].scratch_bytes);
+  }
+}
+
 // Short of memory, a step runs the passes from the one that does not fit onwards in
 // slices of its input, each refining its own queries: a slice's contacts give up only
 // queries of the same slice, and the times must still be the full list's.

@@ -64,8 +64,12 @@ template <class T> PassArg value_of(const T& v)
 //          ending with cs_worklist_check_loops(counts, round);
 //   then the pass's kernel over the inputs: __global S* state, then its emitters.
 // Rounds go in batches with no host round trip between them; the host reads the
-// counts once a batch. A round that overflows the list grows it and the work starts
-// again from the seed, so no item is lost; the state must be a function of the items.
+// counts once a batch. A round that overflows the list stops the rounds after it; the
+// lists grow, keeping its input, and it runs again as a replay (cs_worklist_replay),
+// which must append the items it appended before and leave the state as one run of
+// the round would: updates that are not idempotent (a count) are skipped there. A seed
+// that overflows starts the work again. So no item is lost, and no round but the one
+// that overflowed runs twice.
 struct Worklist {
   std::string seed, round;       // kernel names in the pass's program
   std::size_t item_bytes = 0;    // I
