@@ -39,6 +39,7 @@ struct StreamState {
   // from the step arena, and a new run gives it back.
   bool transient = false;
   std::size_t arena_at = StepArena::none;
+  bool spent = false;  // within a run only (StreamGraph::within_run), and gone back this run
 };
 
 struct EmitterState {
@@ -187,6 +188,7 @@ struct Scheduler::State {
     }
     st.capacity = items;
     st.peak_bytes = std::max(st.peak_bytes, st.buffer.bytes());
+    st.spent = false;
   }
 
   void restore(StreamId s)
@@ -889,8 +891,11 @@ struct Scheduler::State {
   // segments' place to the next.
   void pack_late(PassState& p)
   {
+    bool first = true;
     for (auto& e : p.emitters) {
       if (!packs_late(p, e)) continue;
+      if (!first && use_arena) give_back_spent_inputs(p, host_counters[state(e.stream).slot] * spec(e.stream).element_bytes);
+      first = false;
       if (hands_over(p, e)) {
         hand_over(p, e);
       } else {
@@ -899,6 +904,30 @@ struct Scheduler::State {
       }
       if (e.segments > 0) merge_segments(p, e);
       if (use_arena) drop_segments(e);
+    }
+  }
+
+  // Before pass p packs an output of `bytes` late: its inputs that live within the run
+  // (StreamGraph::within_run) and that no pass after it reads go back, where the output
+  // then still fits in the arena's buffer (so that taking it allocates nothing and
+  // cannot fail, which would leave a pass to run again without its input). After its
+  // first output only: packed first, that one takes a place of its own, and the input's
+  // place joins the first output's segments for the rest. n-body's triangle pairs
+  // (35 MB) so let its edge-edge candidates (59 MB) pack where they and the vertex-face
+  // candidates' segments lay: the step held 387.6 MiB, now 328.6.
+  void give_back_spent_inputs(PassState& p, std::size_t bytes)
+  {
+    const std::size_t at = std::size_t(&p - passes.data());
+    for (StreamId s : p.inputs) {
+      auto& st = state(s);
+      if (!spec(s).within_run || st.arena_at == StepArena::none || !arena.fits_without(st.arena_at, bytes)) continue;
+      const bool read_later = std::any_of(passes.begin() + std::ptrdiff_t(at) + 1, passes.end(), [&](const PassState& q) {
+        return std::find(q.inputs.begin(), q.inputs.end(), s) != q.inputs.end();
+      });
+      if (read_later) continue;
+      st.released = std::max(st.released, st.capacity);
+      drop(st);
+      st.spent = true;
     }
   }
 
@@ -1563,6 +1592,8 @@ void Scheduler::download(StreamId stream, void* items, std::size_t count) const
 {
   auto& s = *state_;
   auto& st = s.state(stream);
+  if (st.spent && count > 0)
+    throw Error("cannot read stream " + s.spec(stream).name + ": it lives within a run, and went back once read");
   if (count > st.count)
     throw Error("cannot read " + std::to_string(count) + " items of stream " + s.spec(stream).name + ", which holds " +
                 std::to_string(st.count));

@@ -12,10 +12,11 @@ StepArena::StepArena(Context& context)
 {
 }
 
-std::size_t StepArena::first_fit(std::size_t bytes) const
+std::size_t StepArena::first_fit(std::size_t bytes, std::size_t ignored) const
 {
   std::size_t place = 0;
   for (const auto& [at, size] : taken_) {
+    if (at == ignored) continue;
     if (place + bytes <= at) break;
     place = std::max(place, round_up(at + size, align_));
   }
@@ -31,6 +32,11 @@ Buffer StepArena::take(std::size_t bytes, const char* label, std::size_t& at)
   high_water_ = std::max(high_water_, place + bytes);
   at = place;
   return taken;
+}
+
+bool StepArena::fits_without(std::size_t at, std::size_t bytes) const
+{
+  return first_fit(std::max<std::size_t>(bytes, 1), at) + std::max<std::size_t>(bytes, 1) <= buffer_.bytes();
 }
 
 void StepArena::give_back(std::size_t& at)

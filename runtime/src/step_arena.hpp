@@ -32,6 +32,9 @@ public:
   // DeviceMemoryExhausted, holding nothing, where a buffer of its own does not fit.
   Buffer take(std::size_t bytes, const char* label, std::size_t& at);
   void give_back(std::size_t& at);  // sets `at` to none
+  // Whether `bytes` taken once what is at `at` went back would lie within the buffer,
+  // so that taking them allocates nothing and cannot run short of memory.
+  bool fits_without(std::size_t at, std::size_t bytes) const;
   // Between runs, with nothing taken: a buffer of the last run's high water, where that
   // run did not outgrow the one before by more than an eighth and the device has room
   // for it twice over (what outgrows it then still has room of its own); else none, and
@@ -46,8 +49,8 @@ public:
   std::size_t bytes() const { return buffer_.bytes(); }
 
 private:
-  // The lowest place where `bytes` are free.
-  std::size_t first_fit(std::size_t bytes) const;
+  // The lowest place where `bytes` are free, what is at `ignored` counted as free.
+  std::size_t first_fit(std::size_t bytes, std::size_t ignored = none) const;
 
   Context& context_;
   std::size_t align_;

@@ -24,7 +24,16 @@ void StreamGraph::gather(StreamId stream)
 {
   StreamSpec& s = streams_.at(stream.index);
   if (!s.variable) throw Error("stream " + s.name + " is fixed-length: a run writes all of it, so there is nothing to gather");
+  if (s.within_run) throw Error("stream " + s.name + " lives within a run, so there is nothing to gather for the caller");
   s.gathered = true;
+}
+
+void StreamGraph::within_run(StreamId stream)
+{
+  StreamSpec& s = streams_.at(stream.index);
+  if (!s.variable) throw Error("stream " + s.name + " is fixed-length: it lives from run to run");
+  if (s.gathered) throw Error("stream " + s.name + " is gathered for the caller, so it outlives its run");
+  s.within_run = true;
 }
 
 ParamId StreamGraph::param(std::string name, std::size_t bytes)

@@ -55,6 +55,23 @@ __kernel void test_keep(__global const uint2* pairs, const uint n, __global uint
   if (i < n) keep[i] = test_hash(pairs[i].x * 31u + pairs[i].y) % 3u != 0u;
 }
 
+/* Two outputs from one pass, a small one first: the first coordinate of every pair
+ * whose second is a multiple of four, then a copy of every pair. */
+__kernel void test_tag_and_copy(__global const uint2* pairs, const uint n, CS_EMITTER_PARAMS(uint, tags),
+                                CS_EMITTER_PARAMS(uint2, copies))
+{
+  CS_EMITTER_BEGIN(tags);
+  CS_EMITTER_BEGIN(copies);
+  const uint i = get_global_id(0);
+  if (i < n) {
+    const uint2 p = pairs[i];
+    if (p.y % 4u == 0u) CS_EMIT(tags, p.x);
+    CS_EMIT(copies, p);
+  }
+  CS_EMITTER_END(tags);
+  CS_EMITTER_END(copies);
+}
+
 /* Two outputs from one pass, the way triangle pairs split into VF and EE features. */
 __kernel void test_split(__global const uint2* pairs, const uint n, __global const uint* squares,
                          CS_EMITTER_PARAMS(uint, even), CS_EMITTER_PARAMS(uint4, odd))

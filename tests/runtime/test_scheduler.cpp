@@ -295,6 +295,50 @@ TEST_CASE("what lives within a run shares one buffer: a settled run holds less, 
   CHECK(with < without);
 }
 
+TEST_CASE("a stream that lives within its run goes back once read, and its reader's later outputs take its place",
+          "[runtime][scheduler][quick]")
+{
+  // values -> (expand) pairs -> (cull) kept -> (tag and copy) tags + copies. Nothing
+  // after tag-and-copy reads kept; marked so, kept goes back once tags (the smaller
+  // output, first) is packed, and copies, as large as kept, packs where kept was.
+  // Settled runs on contexts of their own, so that the peaks are the scheduler's.
+  const std::size_t n = 200000;
+  const auto values = random_values(n, 53);
+  const std::vector<Pair> kept = sorted(cstreams::test::reference(values).kept);
+  std::vector<std::uint32_t> tags;
+  for (const Pair& p : kept)
+    if (p[1] % 4 == 0) tags.push_back(p[0]);
+  const auto settled = [&](bool within) {
+    StreamGraph g;
+    const StreamId in = g.fixed("values", 4, n), pairs = g.variable("pairs", 8, 16), culled = g.variable("kept", 8, 16),
+                   tagged = g.variable("tags", 4, 16), copies = g.variable("copies", 8, 16);
+    g.pass("expand", {program, "test_expand"}).launch_over(in).emit(pairs).arg(buffer_of(in)).arg(count_of(in));
+    g.pass("cull", {program, "test_keep"}).launch_over(pairs).cull(pairs, culled).arg(buffer_of(pairs)).arg(count_of(pairs));
+    g.pass("tag and copy", {program, "test_tag_and_copy"})
+        .launch_over(culled)
+        .emit(tagged)
+        .emit(copies)
+        .arg(buffer_of(culled))
+        .arg(count_of(culled));
+    if (within) g.within_run(culled);
+    Context own(filter_from_environment());
+    own.programs().add_sources(test_kernel_sources());
+    Scheduler s(own, g, {Registration::segmented_lock, true});
+    s.upload(in, values);
+    for (int frame = 0; frame < 4; ++frame) s.run();
+    own.reset_memory_high_water();
+    s.run();
+    CHECK(sorted(s.download<std::uint32_t>(tagged)) == sorted(tags));
+    CHECK(sorted(s.download<Pair>(copies)) == kept);
+    if (within) CHECK_THROWS_WITH(s.download<Pair>(culled), Catch::Contains("kept") && Catch::Contains("within a run"));
+    else CHECK(sorted(s.download<Pair>(culled)) == kept);
+    return own.memory_high_water();
+  };
+  const std::size_t with = settled(true), without = settled(false);
+  INFO("peak with kept within its run " << with << ", without " << without);
+  CHECK(with < without);
+}
+
 TEST_CASE("a later stage's pass registers into the segments an earlier stage's pass held", "[runtime][scheduler][quick]")
 {
   // Without the step arena: segments go through the pool of idle buffers.
@@ -800,6 +844,12 @@ TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][sche
   CHECK_THROWS_WITH(fixed_emit.schedule(), Catch::Contains("emits into fixed-length stream v"));
 
   CHECK_THROWS_WITH(StreamGraph().fixed("odd", 6, 1), Catch::Contains("multiple of 4"));
+
+  StreamGraph lives_on;
+  const StreamId fixed = lives_on.fixed("fixed", 4, 1), kept = lives_on.variable("kept", 4, 1);
+  CHECK_THROWS_WITH(lives_on.within_run(fixed), Catch::Contains("stream fixed is fixed-length"));
+  lives_on.gather(kept);
+  CHECK_THROWS_WITH(lives_on.within_run(kept), Catch::Contains("stream kept is gathered"));
 
   StreamGraph update_variable;
   auto w = update_variable.variable("w", 4, 1);

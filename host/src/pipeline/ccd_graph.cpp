@@ -456,6 +456,7 @@ struct GraphBuilder {
     s.level_cap = g.param("front level cap", 4);
     s.searches_cut = g.fixed("searches cut", 4, 2);
     s.triangle_pairs = g.variable("triangle pairs", 8, guess);
+    g.within_run(s.triangle_pairs);  // only the decomposition reads them
     s.vf = g.variable("vf candidates", 8, guess);
     s.ee = g.variable("ee candidates", 8, guess);
     // The orphan pairs' culls need no front: they go first, before the front update and

@@ -170,6 +170,7 @@ struct StreamSpec {
   bool variable = false;
   std::size_t size = 0;  // item count (fixed) or initial capacity (variable)
   bool gathered = false; // StreamGraph::gather
+  bool within_run = false; // StreamGraph::within_run
 };
 
 struct ParamSpec {
@@ -190,6 +191,12 @@ public:
   // stream so marked then gathers the items of every slice, any other keeps only the
   // last slice's.
   void gather(StreamId stream);
+  // Marks a variable stream that nothing reads once the passes of its run that read it
+  // are done: not the caller, not the next run (triangle pairs, which only the
+  // decomposition reads). In the step arena its place may then go back as soon as its
+  // last reader has packed its first output, so that the outputs after it can take that
+  // place joined to the first's segments; reading it after the run is an error.
+  void within_run(StreamId stream);
   PassSpec& pass(std::string name, KernelRef kernel);
 
   const std::vector<StreamSpec>& streams() const { return streams_; }
