@@ -1,4 +1,5 @@
 #include <cstreams/errors.hpp>
+#include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
 #include <cstreams/pipeline/option_checks.hpp>
@@ -87,25 +88,14 @@ struct DeviceSolver::Graph {
 
 namespace {
 
-// Returns whether rounding to Real changed no coordinate.
-template <class Real> bool upload_points(runtime::Scheduler& s, runtime::StreamId x0, runtime::StreamId x1,
-                                         const std::vector<Query>& queries)
+// The queries' points at the start of the step and at its end, four a query.
+std::array<std::vector<Vec3>, 2> query_points(const std::vector<Query>& queries)
 {
-  std::vector<Real> start, end;
-  start.reserve(queries.size() * 12);
-  end.reserve(queries.size() * 12);
-  bool exact = true;
+  std::array<std::vector<Vec3>, 2> x;
+  for (auto& points : x) points.reserve(4 * queries.size());
   for (const auto& q : queries)
-    for (int i = 0; i < 8; ++i)
-      for (int k = 0; k < 3; ++k) {
-        const Real r = static_cast<Real>(q[i][k]);  // round to nearest
-        (i < 4 ? start : end).push_back(r);
-        exact &= double(r) == q[i][k];
-      }
-  // Three reals a point.
-  s.upload(x0, start.data(), start.size() / 3);
-  s.upload(x1, end.data(), end.size() / 3);
-  return exact;
+    for (int i = 0; i < 8; ++i) x[i / 4].push_back(q[i]);
+  return x;
 }
 
 }  // namespace
@@ -164,8 +154,16 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
     pairs[i] = kind == ContactKind::vertex_face ? std::array<std::uint32_t, 2>{4 * i, i}
                                                 : std::array<std::uint32_t, 2>{2 * i, 2 * i + 1};
   }
-  if (dp) upload_points<double>(s, g.x0, g.x1, queries);
-  else s.set(g.exact_floats, cl_uint(upload_points<float>(s, g.x0, g.x1, queries)));
+  const auto [start, end] = query_points(queries);
+  if (dp) {
+    s.upload(g.x0, start);
+    s.upload(g.x1, end);
+  } else {
+    const FloatPositions f0 = rounded_positions(start), f1 = rounded_positions(end);
+    s.upload(g.x0, f0.rounded.data(), start.size());
+    s.upload(g.x1, f1.rounded.data(), end.size());
+    s.set(g.exact_floats, cl_uint(f0.exact && f1.exact));
+  }
   s.upload(g.faces, faces);
   s.upload(g.edges, edges);
   s.upload(g.pairs, pairs);
