@@ -98,18 +98,6 @@ inline int cs_box_halved(const cs_box a, const cs_box b)
          b.v1 - b.v0 < (real)0.5 * (a.v1 - a.v0);
 }
 
-/* Whether F vanishes at (t, u, v) as far as its bounds there can tell, to within
- * `within` (co-domain units) in every coordinate. */
-inline int cs_vanishes_at(const cs_trilinear* f, const real t, const real u, const real v, const real within)
-{
-  for (int k = 0; k < 3; ++k) {
-    real error;
-    const real value = cs_trilinear_at(f, k, t, u, v, &error);
-    if (!(cs_up(fabs(value) + error) <= within)) return 0;
-  }
-  return 1;
-}
-
 /* best: the earliest contact so far (2 for none). out_of_work: the query's work limit
  * is reached, so a box that is not dropped is a contact (*limited set). *slack is set
  * when the tolerance cut the search short. A box to refine is halved once (*lo, *hi),
@@ -130,15 +118,15 @@ inline int cs_visit_box(const cs_trilinear* f, cs_box b, const int vertex_face, 
     *slack = 1;
   }
   if (vertex_face && b.u0 + b.v0 > 1) return CS_BOX_DROP;
-  real width, farthest, nearest[2], spread[3];
-  if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, spread)) return CS_BOX_DROP;
+  real width, farthest, nearest[2], first, spread[3];
+  if (!cs_trilinear_bounds(f, b, separation, &width, &farthest, nearest, &first, spread)) return CS_BOX_DROP;
   *hit = b.t0;
   if (width <= tol) return CS_BOX_HIT;
   /* A contact at its first corner, where F vanishes to within 2^-10 of the
    * tolerance: features that touch exactly there (a vertex on a vertex it duplicates, a
    * point of one edge on the other) would otherwise be closed in on by halving, a round
    * a halving, until a box around the corner fits within the tolerance. */
-  if (cs_vanishes_at(f, b.t0, b.u0, b.v0, tol * (real)0x1p-10)) return CS_BOX_HIT;
+  if (first <= tol * (real)0x1p-10) return CS_BOX_HIT;
   if (separation > 0) {
     /* |F_k| under separation / sqrt(3) for every k keeps |F| under separation. */
     const real within = separation * (real)0.57735;

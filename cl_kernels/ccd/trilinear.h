@@ -104,15 +104,21 @@ inline int cs_most_varied(const real spread[3])
  * widest side of the bounding box of F, *farthest to the largest |F_k| it allows,
  * nearest[0] and nearest[1] to the largest |F_k| at the corner where that is smallest
  * among the corners at the box's start and end time (with a positive separation
- * only, where they matter), and spread[j] to how much F varies along parameter j
- * (0 t, 1 u, 2 v) across the box (cs_most_varied). */
+ * only, where they matter), *first to the largest |F_k| they allow at the box's first
+ * corner (t0, u0, v0) (NaN where that is not a number), and spread[j] to how much F
+ * varies along parameter j (0 t, 1 u, 2 v) across the box (cs_most_varied). */
 inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
-                               real* farthest, real nearest[2], real spread[3])
+                               real* farthest, real nearest[2], real* first, real spread[3])
 {
   real value[8][3], error[8][3];
   for (int c = 0; c < 8; ++c) {
     const real t = (c & 4) ? b.t1 : b.t0, u = (c & 2) ? b.u1 : b.u0, v = (c & 1) ? b.v1 : b.v0;
     for (int k = 0; k < 3; ++k) value[c][k] = cs_trilinear_at(f, k, t, u, v, &error[c][k]);
+  }
+  *first = 0;
+  for (int k = 0; k < 3; ++k) {
+    const real at = cs_up(fabs(value[0][k]) + error[0][k]);
+    if (!(at <= *first)) *first = at;
   }
   real centre[3];
   *width = 0;
