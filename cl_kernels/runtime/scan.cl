@@ -1,6 +1,7 @@
 /* Exclusive prefix sum of uint, in three kernels the host chains recursively:
  * cs_scan_reduce sums tiles, the tile sums are scanned the same way, and
- * cs_scan_tiles scans each tile starting from its tile's offset.
+ * cs_scan_tiles scans each tile starting from its tile's offset; or, for a few tiles,
+ * in one kernel by one group (cs_scan_in_one_group).
  * Work-items cooperate only through local memory and barriers: nothing assumes
  * they run in lockstep, so the same code is right on pocl, NVIDIA and AMD. */
 #include "common.h"
@@ -44,16 +45,13 @@ CS_GROUP_KERNEL void cs_scan_reduce(__global const uint* in, const uint n, __glo
   if (get_local_id(0) == 0) tile_sums[get_group_id(0)] = total;
 }
 
-/* `in` and `out` may be the same buffer: a group reads its whole tile before writing it. */
-CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __global uint* out,
-                                   __global const uint* tile_offsets, const uint has_offsets,
-                                   __global uint* counters, const uint total_slot)
+/* Scans the tile at `base` starting from `offset` and returns offset plus the tile's sum.
+ * `in` and `out` may be the same buffer: the group reads its whole tile before writing
+ * it. Ends with a barrier, so the group may go on to another tile. */
+inline uint cs_scan_tile(__global const uint* in, const uint n, __global uint* out, const size_t base,
+                         const uint offset, __local uint* tile, __local uint* scratch)
 {
-  __local uint tile[CS_PAD(CS_SCAN_TILE)];
-  __local uint scratch[CS_WG_SIZE];
   const uint lid = get_local_id(0);
-  const size_t base = get_group_id(0) * (size_t)CS_SCAN_TILE;
-
   for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
     const uint t = k * CS_WG_SIZE + lid;
     tile[CS_PAD(t)] = base + t < n ? in[base + t] : 0u;
@@ -64,7 +62,6 @@ CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __glob
   for (uint k = 0; k < CS_SCAN_ITEMS; ++k) sum += tile[CS_PAD(lid * CS_SCAN_ITEMS + k)];
   uint group_total;
   const uint prefix = cs_group_exclusive_scan(sum, scratch, &group_total);
-  const uint offset = has_offsets ? tile_offsets[get_group_id(0)] : 0u;
   uint running = offset + prefix;
   for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
     const uint t = CS_PAD(lid * CS_SCAN_ITEMS + k);
@@ -78,6 +75,31 @@ CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __glob
     const uint t = k * CS_WG_SIZE + lid;
     if (base + t < n) out[base + t] = tile[CS_PAD(t)];
   }
-  if (total_slot != CS_NO_SLOT && lid == 0 && get_group_id(0) == get_num_groups(0) - 1)
-    counters[total_slot] = offset + group_total;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return offset + group_total;
+}
+
+CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __global uint* out,
+                                   __global const uint* tile_offsets, const uint has_offsets,
+                                   __global uint* counters, const uint total_slot)
+{
+  __local uint tile[CS_PAD(CS_SCAN_TILE)];
+  __local uint scratch[CS_WG_SIZE];
+  const uint offset = has_offsets ? tile_offsets[get_group_id(0)] : 0u;
+  const uint end = cs_scan_tile(in, n, out, get_group_id(0) * (size_t)CS_SCAN_TILE, offset, tile, scratch);
+  if (total_slot != CS_NO_SLOT && get_local_id(0) == 0 && get_group_id(0) == get_num_groups(0) - 1)
+    counters[total_slot] = end;
+}
+
+/* The whole scan by one group, tile after tile, where the input is a few tiles long: one
+ * launch where the three kernels above take three, each costing its launch and tail
+ * (H100: 4-8 us each, for the few thousand segment counts of an emitting pass). */
+CS_GROUP_KERNEL void cs_scan_in_one_group(__global const uint* in, const uint n, __global uint* out,
+                                          __global uint* counters, const uint total_slot)
+{
+  __local uint tile[CS_PAD(CS_SCAN_TILE)];
+  __local uint scratch[CS_WG_SIZE];
+  uint end = 0;
+  for (size_t base = 0; base < n; base += CS_SCAN_TILE) end = cs_scan_tile(in, n, out, base, end, tile, scratch);
+  if (total_slot != CS_NO_SLOT && get_local_id(0) == 0) counters[total_slot] = end;
 }

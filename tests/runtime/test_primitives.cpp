@@ -125,6 +125,28 @@ TEST_CASE("exclusive scan equals the host's at sizes 0, 1, 2^k-1, 2^k, 2^k+1", "
   check_scan(100000, true);
 }
 
+TEST_CASE("a scan of a few tiles takes one launch, and is right in place", "[runtime][scan][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  Scan scan(ctx);
+  const std::size_t tile = scan.tile_items();
+  Buffer data(ctx, 8 * tile * 4, "scan data"), counters(ctx, 4, "counters");
+  ctx.fill_u32(data, 1, 0, 8 * tile);
+  auto launches = [&](std::size_t n) {
+    const std::uint64_t before = ctx.kernel_launches();
+    scan.exclusive(data, data, n, counters, 0);
+    return ctx.kernel_launches() - before;
+  };
+  for (std::size_t n : {std::size_t(1), tile, tile + 1, 4 * tile}) {
+    INFO("n = " << n);
+    CHECK(launches(n) == 1);
+    check_scan(n, true);
+  }
+  // Beyond: the tiles' sums, their scan (one launch) and the tiles.
+  CHECK(launches(4 * tile + 1) == 3);
+  check_scan(4 * tile + 1, true);
+}
+
 TEST_CASE("exclusive scan equals the host's at millions of items", "[runtime][scan][slow]")
 {
   for (std::size_t n : {std::size_t(1) << 22, (std::size_t(1) << 22) + 1, std::size_t(5'000'011)}) check_scan(n, false);

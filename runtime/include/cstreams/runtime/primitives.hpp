@@ -25,7 +25,7 @@ public:
   void exclusive(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
                  Timeline* timeline = nullptr, const char* label = "scan");
   std::size_t scratch_bytes() const;
-  // Items one tile of the scan covers; inputs up to this size take a single launch.
+  // Items one tile of the scan covers; inputs of a few tiles take a single launch.
   std::size_t tile_items() const;
 
 private:
@@ -36,6 +36,7 @@ private:
   std::size_t items_per_work_item_;
   Kernel reduce_;
   Kernel tiles_;
+  Kernel one_group_;
   std::vector<Buffer> levels_;
 };
 
