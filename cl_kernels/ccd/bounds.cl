@@ -1,11 +1,11 @@
-/* Swept bounds of features over a step, and the level-by-level refit of the
- * BVH (nodes in breadth-first order: a level's nodes are contiguous and their
- * children lie in the next level). */
+/* Swept bounds of features over a step, and the refit of the BVH, bottom up (nodes in
+ * breadth-first order: a level's nodes are contiguous and their children lie in the
+ * next level). */
 #include "bounds.h"
 #include "runtime/common.h"
 
 inline void cs_swept_dop(__global const float* x0, __global const float* x1, const uint* vertices, const int count,
-                         const float separation, __global float* out)
+                         const float separation, __local float* out)
 {
   float lo[9], hi[9];
   cs_dop_empty(lo, hi);
@@ -22,29 +22,39 @@ inline void cs_swept_dop(__global const float* x0, __global const float* x1, con
 }
 
 /* One work-item per moving primitive: the nf faces, then the ne edges, then the nv
- * vertices, in one launch rather than one a kind. */
-__kernel void cs_primitive_bounds(__global const float* x0, __global const float* x1, __global const uint* faces,
-                                  __global const uint* edges, const uint nf, const uint ne, const uint nv,
-                                  const float separation, __global float* face_boxes, __global float* edge_boxes,
-                                  __global float* vertex_boxes)
+ * vertices, in one launch rather than one a kind. The group's boxes are staged in local
+ * memory and written word by word across the group, neighbouring work-items to
+ * neighbouring words: a box a work-item put 72 bytes between the words of one store. */
+CS_GROUP_KERNEL void cs_primitive_bounds(__global const float* x0, __global const float* x1,
+                                         __global const uint* faces, __global const uint* edges, const uint nf,
+                                         const uint ne, const uint nv, const float separation,
+                                         __global float* face_boxes, __global float* edge_boxes,
+                                         __global float* vertex_boxes)
 {
-  uint i = get_global_id(0);
+  __local float staged[CS_WG_SIZE * CS_DOP_FLOATS];
+  const uint lid = get_local_id(0), first = get_group_id(0) * CS_WG_SIZE, i = first + lid;
+  const uint nfe = nf + ne, total = nfe + nv;
   uint vertices[3];
+  int count = 0;
   if (i < nf) {
     for (int c = 0; c < 3; ++c) vertices[c] = faces[3 * i + c];
-    cs_swept_dop(x0, x1, vertices, 3, separation, face_boxes + (size_t)CS_DOP_FLOATS * i);
-    return;
+    count = 3;
+  } else if (i < nfe) {
+    for (int c = 0; c < 2; ++c) vertices[c] = edges[2 * (i - nf) + c];
+    count = 2;
+  } else if (i < total) {
+    vertices[0] = i - nfe;
+    count = 1;
   }
-  i -= nf;
-  if (i < ne) {
-    for (int c = 0; c < 2; ++c) vertices[c] = edges[2 * i + c];
-    cs_swept_dop(x0, x1, vertices, 2, separation, edge_boxes + (size_t)CS_DOP_FLOATS * i);
-    return;
-  }
-  i -= ne;
-  if (i < nv) {
-    vertices[0] = i;
-    cs_swept_dop(x0, x1, vertices, 1, separation, vertex_boxes + (size_t)CS_DOP_FLOATS * i);
+  if (count) cs_swept_dop(x0, x1, vertices, count, separation, staged + CS_DOP_FLOATS * lid);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  const uint words = min((uint)CS_WG_SIZE, total - first) * CS_DOP_FLOATS;
+  for (uint w = lid; w < words; w += CS_WG_SIZE) {
+    const uint j = first + w / CS_DOP_FLOATS, k = w % CS_DOP_FLOATS;
+    __global float* box = j < nf ? face_boxes + (size_t)CS_DOP_FLOATS * j
+                          : j < nfe ? edge_boxes + (size_t)CS_DOP_FLOATS * (j - nf)
+                                    : vertex_boxes + (size_t)CS_DOP_FLOATS * (j - nfe);
+    box[k] = staged[w];
   }
 }
 
@@ -53,37 +63,36 @@ inline void cs_refit_node(__global const int4* nodes, __global const float* face
                           __global float* node_boxes)
 {
   const int left = nodes[node].x, face = nodes[node].y;
-  __global float* out = node_boxes + (size_t)CS_DOP_FLOATS * node;
+  float a[CS_DOP_FLOATS];
   if (left < 0) {
-    for (int k = 0; k < CS_DOP_FLOATS; ++k) out[k] = face_boxes[(size_t)CS_DOP_FLOATS * face + k];
-    return;
+    cs_dop_load(face_boxes + (size_t)CS_DOP_FLOATS * face, a);
+  } else {
+    float b[CS_DOP_FLOATS];
+    cs_dop_load(node_boxes + (size_t)CS_DOP_FLOATS * left, a);
+    cs_dop_load(node_boxes + (size_t)CS_DOP_FLOATS * (left + 1), b);
+    for (int k = 0; k < 9; ++k) {
+      a[k] = fmin(a[k], b[k]);
+      a[9 + k] = fmax(a[9 + k], b[9 + k]);
+    }
   }
-  __global const float* a = node_boxes + (size_t)CS_DOP_FLOATS * left;
-  __global const float* b = a + CS_DOP_FLOATS;
-  for (int k = 0; k < 9; ++k) {
-    out[k] = fmin(a[k], b[k]);
-    out[9 + k] = fmax(a[9 + k], b[9 + k]);
-  }
+  cs_dop_store(a, node_boxes + (size_t)CS_DOP_FLOATS * node);
 }
 
-__kernel void cs_refit_level(__global const int4* nodes, __global const float* face_boxes, const uint first,
-                             const uint count, __global float* node_boxes)
+/* Levels top to top + depth - 1 of the forest, deepest first, in one launch, one group
+ * a node of level top; the level below them was refitted by the launch before. In
+ * breadth-first order the children of consecutive nodes are consecutive, so what a
+ * group refits at each level is one range of it: ranges[first + group * depth + d] for
+ * level top + d (plan_refit, ccd_graph.cpp). A barrier makes a level's boxes visible to
+ * the group before the level above reads them. A launch a level cost its launch and its
+ * tail (H100, cloth-ball: 0.14 ms for 18 levels); a group's barrier costs far less. */
+CS_GROUP_KERNEL void cs_refit_levels(__global const int4* nodes, __global const float* face_boxes,
+                                     __global const uint2* ranges, const uint first, const uint depth,
+                                     __global float* node_boxes)
 {
-  const uint i = get_global_id(0);
-  if (i < count) cs_refit_node(nodes, face_boxes, first + i, node_boxes);
-}
-
-/* Levels `top` up to 0, deepest first, by one work-group: each of these levels holds
- * too few nodes to be worth a launch of its own (a launch costs about as much as
- * refitting a few hundred nodes). The barrier makes a level's boxes visible to the
- * group before the level above reads them. levels: as SceneLayout::levels. */
-CS_GROUP_KERNEL void cs_refit_top_levels(__global const int4* nodes, __global const float* face_boxes,
-                                         __global const uint* levels, const uint top, __global float* node_boxes)
-{
-  for (uint level = top + 1; level-- > 0;) {
-    const uint end = levels[level + 1];
-    for (uint node = levels[level] + get_local_id(0); node < end; node += CS_WG_SIZE)
-      cs_refit_node(nodes, face_boxes, node, node_boxes);
-    barrier(CLK_GLOBAL_MEM_FENCE);
+  ranges += first + (size_t)get_group_id(0) * depth;
+  for (uint d = depth; d-- > 0;) {
+    const uint2 r = ranges[d];
+    for (uint n = r.x + get_local_id(0); n < r.y; n += CS_WG_SIZE) cs_refit_node(nodes, face_boxes, n, node_boxes);
+    if (d) barrier(CLK_GLOBAL_MEM_FENCE);
   }
 }

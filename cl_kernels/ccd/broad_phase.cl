@@ -48,9 +48,8 @@
 
 /* On a GPU both boxes are read whole before any slab is compared: loads that an early
  * return could skip are issued one after another, each waiting for the one before (on
- * the H200 the front update and the decomposition took a fifth longer so). A box starts
- * 72 bytes after the one before, so pairs of floats are aligned. On a CPU the early
- * return wins (pocl: the front update 180 -> 130 ms on cloth-ball). */
+ * the H200 the front update and the decomposition took a fifth longer so). On a CPU the
+ * early return wins (pocl: the front update 180 -> 130 ms on cloth-ball). */
 inline int cs_dop_overlap(__global const float* a, __global const float* b)
 {
 #if CS_CPU
@@ -59,13 +58,8 @@ inline int cs_dop_overlap(__global const float* a, __global const float* b)
   return 1;
 #else
   float x[CS_DOP_FLOATS], y[CS_DOP_FLOATS];
-  for (int k = 0; k < CS_DOP_FLOATS / 2; ++k) {
-    const float2 u = ((__global const float2*)a)[k], v = ((__global const float2*)b)[k];
-    x[2 * k] = u.x;
-    x[2 * k + 1] = u.y;
-    y[2 * k] = v.x;
-    y[2 * k + 1] = v.y;
-  }
+  cs_dop_load(a, x);
+  cs_dop_load(b, y);
   int apart = 0;
   for (int k = 0; k < 9; ++k) apart |= (x[k] > y[9 + k]) | (y[k] > x[9 + k]);
   return !apart;

@@ -96,15 +96,18 @@ ObjectDescription ball(const std::string& name, const Vec3& centre, ObjectKind k
 }  // namespace
 
 // The levels the refit passes go over, in their order: "refit level k" is level k,
-// "refit levels 0-t" levels t down to 0.
+// "refit levels t-b" levels b down to t.
 std::vector<std::size_t> refitted_levels(const runtime::StreamGraph& g)
 {
   std::vector<std::size_t> levels;
   for (const auto& p : g.passes()) {
-    if (p.name.rfind("refit levels 0-", 0) == 0)
-      for (std::size_t k = std::stoul(p.name.substr(15)) + 1; k-- > 0;) levels.push_back(k);
-    else if (p.name.rfind("refit level ", 0) == 0)
+    if (p.name.rfind("refit levels ", 0) == 0) {
+      const std::size_t dash = p.name.find('-');
+      const std::size_t top = std::stoul(p.name.substr(13, dash - 13));
+      for (std::size_t k = std::stoul(p.name.substr(dash + 1)) + 1; k-- > top;) levels.push_back(k);
+    } else if (p.name.rfind("refit level ", 0) == 0) {
       levels.push_back(std::stoul(p.name.substr(12)));
+    }
   }
   return levels;
 }
@@ -116,11 +119,14 @@ std::vector<std::size_t> levels_up_from(std::size_t depth)
   return levels;
 }
 
-TEST_CASE("the refit goes over every level once, deepest first, the small ones in one pass", "[detector][quick]")
+TEST_CASE("the refit goes over every level once, deepest first, as many a launch as a group can take",
+          "[detector][quick]")
 {
+  // Trees of different depths in one forest: where one tree ends, a group's ranges below
+  // are empty.
   SceneDescription scene;
   scene.add(ball("cloth", {0, 0, 0}, ObjectKind::deformable, true));
-  scene.add(ball("ball", {0.5, 0, 0}, ObjectKind::rigid, false));
+  scene.add({"small", {{0, 1, 2}, {0, 2, 3}}, {{2, 0, 0}, {3, 0, 0}, {3, 1, 0}, {2, 1, 0}}, ObjectKind::rigid, false});
   const SceneLayout layout = make_layout(scene, 0);
   for (std::size_t group : {1, 4, 64, 256}) {
     GraphDevice device;
@@ -128,12 +134,27 @@ TEST_CASE("the refit goes over every level once, deepest first, the small ones i
     const auto g = build_ccd_graph(layout, DetectorOptions{}, expand_front(layout, 64).size(), device);
     INFO("work-group size " << group);
     CHECK(refitted_levels(g.graph) == levels_up_from(layout.depth));
-    // Levels of up to four nodes a work-item go in the one pass, the others each in a pass.
-    std::size_t top = 0;
-    while (top < layout.depth && layout.levels[top + 1] - layout.levels[top] <= 4 * group) ++top;
+    // A group of 2^k work-items takes k + 1 levels a launch.
+    std::size_t per_launch = 1;
+    while ((std::size_t(1) << per_launch) <= group) ++per_launch;
     const std::size_t passes = std::count_if(g.graph.passes().begin(), g.graph.passes().end(),
                                              [](const auto& p) { return p.name.rfind("refit", 0) == 0; });
-    CHECK(passes == layout.depth - top + (top > 0));
+    CHECK(passes == (layout.depth + per_launch - 1) / per_launch);
+    // The groups of a band, one a node of its top level, cover each of its levels with
+    // their ranges in order, each node once.
+    const RefitPlan plan = plan_refit(layout, group);
+    CHECK(g.refit_ranges == plan.ranges);
+    for (const RefitBand& band : plan.bands)
+      for (std::size_t d = 0; d < band.levels; ++d) {
+        std::uint32_t next = layout.levels[band.top + d];
+        for (std::size_t node = layout.levels[band.top]; node < layout.levels[band.top + 1]; ++node) {
+          const auto range = plan.ranges[band.first_range + (node - layout.levels[band.top]) * band.levels + d];
+          if (range[0] == range[1]) continue;
+          CHECK(range[0] == next);
+          next = range[1];
+        }
+        CHECK(next == layout.levels[band.top + d + 1]);
+      }
   }
 }
 
@@ -152,7 +173,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     const auto g = graph_of(scene);
     const auto passes = names(g.passes()), streams = names(g.streams());
     CHECK(contains(passes, "swept bounds"));
-    CHECK(contains(passes, "refit levels 0-" + std::to_string(make_layout(scene, 0).depth - 1)));
+    CHECK(refitted_levels(g) == levels_up_from(make_layout(scene, 0).depth));
     CHECK(contains(passes, "front update"));
     CHECK(contains(passes, "cull orphan vf"));
     CHECK(contains(passes, "cull orphan ee"));

@@ -162,6 +162,35 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
   return l;
 }
 
+RefitPlan plan_refit(const SceneLayout& layout, std::size_t group)
+{
+  RefitPlan plan;
+  if (layout.levels.size() < 2) return plan;
+  // As many levels a launch as keep a group's deepest one within its work-items where
+  // the tree is full.
+  std::size_t levels = 1;
+  while ((std::size_t(1) << levels) <= group) ++levels;
+  for (std::size_t end = layout.levels.size() - 1; end > 0;) {
+    const std::size_t top = end > levels ? end - levels : 0;
+    plan.bands.push_back({top, end - top, plan.ranges.size()});
+    for (std::uint32_t n = layout.levels[top]; n < layout.levels[top + 1]; ++n) {
+      std::array<std::uint32_t, 2> range{n, n + 1};
+      for (std::size_t d = top; d < end; ++d) {
+        plan.ranges.push_back(range);
+        std::array<std::uint32_t, 2> below{0, 0};
+        for (std::uint32_t m = range[0]; m < range[1]; ++m)
+          if (const std::int32_t child = layout.nodes[m][0]; child >= 0) {
+            if (below[0] == below[1]) below[0] = std::uint32_t(child);
+            below[1] = std::uint32_t(child) + 2;
+          }
+        range = below;
+      }
+    }
+    end = top;
+  }
+  return plan;
+}
+
 std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target)
 {
   return expand_front(layout, layout.seeds, target, std::numeric_limits<std::size_t>::max());
@@ -381,7 +410,7 @@ struct GraphBuilder {
 
   // Swept bounds of the moving prefix and the refit of its trees; static objects'
   // bounds are uploaded once.
-  void bounds_and_refit(std::size_t group)
+  void bounds_and_refit(std::size_t group, const RefitPlan& refit)
   {
     using namespace runtime;
     if (l.moving_faces == 0) return;
@@ -402,35 +431,22 @@ struct GraphBuilder {
         .arg(buffer_of(s.face_boxes))
         .arg(buffer_of(s.edge_boxes))
         .arg(buffer_of(s.vertex_boxes));
-    // Deepest level first; each level reads the one below, written by the previous pass.
-    // The levels above the first with more nodes than a few per work-item of a group
-    // go in one launch, by one group.
-    const std::size_t levels = l.levels.size() - 1;
-    std::size_t top = 0;
-    while (top < levels && l.levels[top + 1] - l.levels[top] <= 4 * group) ++top;
-    for (std::size_t level = levels; level-- > top;) {
-      const cl_uint first = l.levels[level], count = l.levels[level + 1] - first;
-      g.pass("refit level " + std::to_string(level), {bounds, "cs_refit_level"})
-          .launch_items(count)
+    s.refit_ranges = g.fixed("refit ranges", 8, refit.ranges.size());
+    for (const RefitBand& band : refit.bands) {
+      const std::size_t last = band.top + band.levels - 1;
+      const std::string name = band.levels == 1 ? "refit level " + std::to_string(band.top)
+                                                : "refit levels " + std::to_string(band.top) + "-" + std::to_string(last);
+      g.pass(name, {bounds, "cs_refit_levels"})
+          .launch_items((l.levels[band.top + 1] - l.levels[band.top]) * group)
           .update(s.node_boxes)
           .read(s.face_boxes)
           .arg(buffer_of(s.nodes))
           .arg(buffer_of(s.face_boxes))
-          .arg(value_of(first))
-          .arg(value_of(count))
+          .arg(buffer_of(s.refit_ranges))
+          .arg(value_of(cl_uint(band.first_range)))
+          .arg(value_of(cl_uint(band.levels)))
           .arg(buffer_of(s.node_boxes));
     }
-    if (top == 0) return;
-    s.levels = g.fixed("bvh levels", 4, l.levels.size());
-    g.pass("refit levels 0-" + std::to_string(top - 1), {bounds, "cs_refit_top_levels"})
-        .launch_items(group)
-        .update(s.node_boxes)
-        .read(s.face_boxes)
-        .arg(buffer_of(s.nodes))
-        .arg(buffer_of(s.face_boxes))
-        .arg(buffer_of(s.levels))
-        .arg(value_of(cl_uint(top - 1)))
-        .arg(buffer_of(s.node_boxes));
   }
 
   // The culls of the orphan pairs, then the front update (or search from fixed seeds)
@@ -576,7 +592,9 @@ CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& optio
   if (options.solver.min_separation < 0) throw InputError("the minimum separation must not be negative");
   GraphBuilder b(layout, options);
   b.geometry_streams();
-  b.bounds_and_refit(device.work_group_size);
+  RefitPlan refit = plan_refit(layout, device.work_group_size);
+  b.bounds_and_refit(device.work_group_size, refit);
+  b.out.refit_ranges = std::move(refit.ranges);
   if (!layout.seeds.empty()) {
     b.broad_phase(front_size, device.bounded_loops);
     b.elementary_tests(device);

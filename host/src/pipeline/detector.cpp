@@ -100,7 +100,7 @@ struct Detector::State {
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});
-    start_exact = end_exact = upload_scene(*scheduler, streams, layout, scene, options.solver.min_separation);
+    start_exact = end_exact = upload_scene(*scheduler, g, layout, scene, options.solver.min_separation);
     if (!has(streams.front)) return;
     front.install(*scheduler, streams, seeds);
   }

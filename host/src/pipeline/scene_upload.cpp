@@ -45,15 +45,16 @@ void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, r
   if (has(exact)) scheduler.write(exact, first, x.data(), x.size());
 }
 
-std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdStreams& s, const SceneLayout& layout,
+std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const SceneLayout& layout,
                                const SceneDescription& scene, double min_separation)
 {
+  const CcdStreams& s = g.streams;
   std::vector<bool> exact(scene.objects.size());
   const Topology& t = layout.topology;
   q.write(s.faces, 0, t.faces.data(), t.faces.size());
   q.write(s.edges, 0, t.edges.data(), t.edges.size());
   q.write(s.nodes, 0, layout.nodes.data(), layout.nodes.size());
-  if (has(s.levels)) q.write(s.levels, 0, layout.levels.data(), layout.levels.size());
+  if (has(s.refit_ranges)) q.write(s.refit_ranges, 0, g.refit_ranges.data(), g.refit_ranges.size());
   for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
     const ObjectDescription& object = scene.objects[o];
     const std::vector<Vec3>& x = object.positions;

@@ -15,7 +15,7 @@ namespace cstreams {
 // objects' bounds included (computed once by the host's float twin of the device), and
 // the positions the scene starts from. Returns whether each object's positions are
 // floats (FloatPositions::exact).
-std::vector<bool> upload_scene(runtime::Scheduler& scheduler, const CcdStreams& streams, const SceneLayout& layout,
+std::vector<bool> upload_scene(runtime::Scheduler& scheduler, const CcdGraph& graph, const SceneLayout& layout,
                                const SceneDescription& scene, double min_separation);
 
 // The checks a moving object's positions from a caller must pass (an InputError naming

@@ -64,14 +64,30 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target
 std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePair> front, std::size_t target,
                                    std::size_t most);
 
+// The refit of the moving trees' boxes, in launches of a band of levels each, deepest
+// first (cs_refit_levels): a band goes over `levels` levels from `top` up, one group a
+// node of level top, and that group's nodes at level top + d are the range
+// ranges[first_range + group * levels + d] (first, end). In breadth-first order the
+// children of consecutive nodes are consecutive, so they are one range of each level.
+struct RefitBand {
+  std::size_t top = 0, levels = 0, first_range = 0;
+};
+struct RefitPlan {
+  std::vector<RefitBand> bands;
+  std::vector<std::array<std::uint32_t, 2>> ranges;
+};
+// As many levels a band as keep a group's deepest one within its `group` work-items
+// where the tree is full.
+RefitPlan plan_refit(const SceneLayout& layout, std::size_t group);
+
 // The streams of the CCD graph; those a scene does not need stay unset.
 struct CcdStreams {
   runtime::StreamId x0, x1, x0_double, x1_double;
   // The ends of the step after the next, uploaded ahead (Detector::upload_ahead): no
   // pass reads them, and they hold nothing until the first such upload.
   runtime::StreamId x_next, x_next_double;
-  runtime::StreamId faces, edges, nodes, levels, face_edges, owned, vertex_object;
-  runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes;
+  runtime::StreamId faces, edges, nodes, face_edges, owned, vertex_object;
+  runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes, refit_ranges;
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
@@ -139,6 +155,7 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
 struct CcdGraph {
   runtime::StreamGraph graph;
   CcdStreams streams;
+  std::vector<std::array<std::uint32_t, 2>> refit_ranges;  // RefitPlan::ranges, for upload_scene
 };
 
 // The CCD stream graph of one scene: swept bounds and refit for moving objects only,
