@@ -9,6 +9,7 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
 #endif
+#include "runtime/common.h"
 #include "streams.h"
 
 __kernel void cs_clear_earliest(const uint objects, __global uint* earliest)
@@ -17,35 +18,61 @@ __kernel void cs_clear_earliest(const uint objects, __global uint* earliest)
   if (i < objects) earliest[i] = as_uint(1.0f);
 }
 
-/* One contact of `contacts`: (feature a, feature b, time bits) as narrow_phase_pairs.cl
- * emits them, built with the same CS_REAL_DOUBLE; vertex_face: a is a vertex and b a
- * face, else both are edges. */
-inline void cs_earliest_of(const uint4 c, const uint vertex_face, __global const uint* faces,
-                           __global const uint* edges, __global const uint* vertex_object, __global uint* earliest)
+/* Contact c's time as the bits of a float no later than it. c is (feature a, feature b,
+ * time bits) as narrow_phase_pairs.cl emits them, built with the same CS_REAL_DOUBLE. */
+inline uint cs_contact_time_key(const uint4 c)
 {
 #if CS_REAL_DOUBLE
   const double d = as_double(c.zw);
   float t = (float)d;
   if ((double)t > d) t = nextafter(t, 0.0f);
+  return as_uint(t);
 #else
-  const float t = as_float(c.z);
+  return c.z;
 #endif
-  const uint a = vertex_object[vertex_face ? c.x : edges[2 * c.x]];
-  const uint b = vertex_object[vertex_face ? faces[3 * c.y] : edges[2 * c.y]];
-  /* Objects are few and contacts many, so atomics on one object queue up; a minimum
-   * only falls, so a time no earlier than what is already there needs none. */
-  if (as_uint(t) < earliest[a]) atomic_min(&earliest[a], as_uint(t));
-  if (as_uint(t) < earliest[b]) atomic_min(&earliest[b], as_uint(t));
 }
+
+/* A minimum only falls, so a time no earlier than what is already there needs no atomic. */
+inline void cs_lower_earliest(__global uint* earliest, const uint object, const uint key)
+{
+  if (key < earliest[object]) atomic_min(&earliest[object], key);
+}
+
+#define CS_NONE 0xffffffffu /* no object, or no time yet: above every time's bits */
 
 CS_DEFINE_STREAM_ITEM(uint4)
 
-/* Every contact stream of a step in one launch. */
-__kernel void cs_earliest_toi(CS_FOUR_STREAMS(uint4), __global const uint* faces, __global const uint* edges,
-                              __global const uint* vertex_object, __global uint* earliest)
+/* Every contact stream of a step in one launch. Objects are few and contacts many, so
+ * atomics on one object's word queue up: a group takes the minimum over the objects of
+ * its first contact in local memory first (a group's contacts mostly share them: the
+ * cloth and the ball on cloth-ball), and reaches their words once. */
+/* vertex_face: a stream's contacts are of a vertex and a face, else of two edges. */
+CS_GROUP_KERNEL void cs_earliest_toi(CS_FOUR_STREAMS(uint4), __global const uint* faces, __global const uint* edges,
+                                     __global const uint* vertex_object, __global uint* earliest)
 {
+  __local uint objects[2], least[2];
   uint4 c;
-  uint vertex_face;
-  if (cs_stream_item_uint4(get_global_id(0), CS_FOUR_STREAM_ARGS, &c, &vertex_face))
-    cs_earliest_of(c, vertex_face, faces, edges, vertex_object, earliest);
+  uint vertex_face, mine[2] = {CS_NONE, CS_NONE}, key = 0;
+  if (cs_stream_item_uint4(get_global_id(0), CS_FOUR_STREAM_ARGS, &c, &vertex_face)) {
+    key = cs_contact_time_key(c);
+    mine[0] = vertex_object[vertex_face ? c.x : edges[2 * c.x]];
+    mine[1] = vertex_object[vertex_face ? faces[3 * c.y] : edges[2 * c.y]];
+  }
+  const uint lid = get_local_id(0);
+  if (lid < 2) {
+    objects[lid] = mine[lid];
+    least[lid] = CS_NONE;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (int k = 0; k < 2; ++k) {
+    if (mine[k] == CS_NONE) continue;
+    if (mine[k] == objects[0])
+      atomic_min(&least[0], key);
+    else if (mine[k] == objects[1])
+      atomic_min(&least[1], key);
+    else
+      cs_lower_earliest(earliest, mine[k], key);
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid < 2 && least[lid] != CS_NONE) cs_lower_earliest(earliest, objects[lid], least[lid]);
 }
