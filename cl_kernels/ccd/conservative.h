@@ -175,12 +175,6 @@ inline real cs_query_scale(const cs_query* q)
   return s;
 }
 
-inline cs_box cs_root_box(void)
-{
-  const cs_box root = {0, 1, 0, 1, 0, 1};
-  return root;
-}
-
 /* The answer from the earliest contact found and whether the tolerance cut in. */
 inline real cs_final_time(real best, const int slack, const real tolerance)
 {

@@ -51,7 +51,7 @@ inline int cs_screen_open(const uint2 pair, const uint vertex_face, __global con
     const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
     const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
     real width, farthest, nearest[2], first, spread[3];
-    if (!cs_trilinear_bounds(&f, cs_root_box(), separation, &width, &farthest, nearest, &first, spread)) return 0;
+    if (!cs_trilinear_root_bounds(&f, separation, &width, &farthest, nearest, &first, spread)) return 0;
   }
   if (!use_filter || separation != 0) return 1;
   /* Loaded again rather than kept: the bounds need every register they can get. */

@@ -28,6 +28,13 @@ inline cs_box cs_box_of(const real lo[3], const real hi[3])
   return b;
 }
 
+/* The whole parameter box. */
+inline cs_box cs_root_box(void)
+{
+  const cs_box root = {0, 1, 0, 1, 0, 1};
+  return root;
+}
+
 /* c[j][k]: coefficient j (A, B, C, D, E, G) of coordinate k; w[j][k] its error weight. */
 typedef struct {
   real c[6][3];
@@ -107,14 +114,10 @@ inline int cs_most_varied(const real spread[3])
  * only, where they matter), *first to the largest |F_k| they allow at the box's first
  * corner (t0, u0, v0) (NaN where that is not a number), and spread[j] to how much F
  * varies along parameter j (0 t, 1 u, 2 v) across the box (cs_most_varied). */
-inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
-                               real* farthest, real nearest[2], real* first, real spread[3])
+inline int cs_trilinear_bounds_of(const cs_trilinear* f, const cs_box b, const real value[8][3],
+                                  const real error[8][3], const real separation, real* width, real* farthest,
+                                  real nearest[2], real* first, real spread[3])
 {
-  real value[8][3], error[8][3];
-  for (int c = 0; c < 8; ++c) {
-    const real t = (c & 4) ? b.t1 : b.t0, u = (c & 2) ? b.u1 : b.u0, v = (c & 1) ? b.v1 : b.v0;
-    for (int k = 0; k < 3; ++k) value[c][k] = cs_trilinear_at(f, k, t, u, v, &error[c][k]);
-  }
   *first = 0;
   for (int k = 0; k < 3; ++k) {
     const real at = cs_up(fabs(value[0][k]) + error[0][k]);
@@ -202,6 +205,64 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
     if (cs_down(lo) > reach || cs_up(hi) < -reach) return 0;
   }
   return 1;
+}
+
+/* F at corner c of b (t = c >> 2, u = (c >> 1) & 1, v = c & 1) as computed, and its
+ * error bound (cs_trilinear_at). */
+inline void cs_trilinear_corners(const cs_trilinear* f, const cs_box b, real value[8][3], real error[8][3])
+{
+  for (int c = 0; c < 8; ++c) {
+    const real t = (c & 4) ? b.t1 : b.t0, u = (c & 2) ? b.u1 : b.u0, v = (c & 1) ? b.v1 : b.v0;
+    for (int k = 0; k < 3; ++k) value[c][k] = cs_trilinear_at(f, k, t, u, v, &error[c][k]);
+  }
+}
+
+/* The same at the corners of the whole parameter box, where t, u and v are 0 or 1: every
+ * product is exact, and a term that is zero adds nothing to cs_trilinear_at's sum. So
+ * the sums below, in its order and without those terms, are the same to the bit, for a
+ * fifth of its arithmetic: partial sums are shared between corners. */
+inline void cs_trilinear_root_corners(const cs_trilinear* f, real value[8][3], real error[8][3])
+{
+  for (int k = 0; k < 3; ++k)
+    for (int which = 0; which < 2; ++which) {
+      const real a = which ? f->w[0][k] : f->c[0][k], b = which ? f->w[1][k] : f->c[1][k],
+                 c = which ? f->w[2][k] : f->c[2][k], d = which ? f->w[3][k] : f->c[3][k],
+                 e = which ? f->w[4][k] : f->c[4][k], g = which ? f->w[5][k] : f->c[5][k];
+      /* Corner (t, u, v): ((((a + t b) + u c) + t u d) + v e) + t v g. */
+      const real at_t[2] = {a, a + b};
+      real sum[8];
+      for (int t = 0; t < 2; ++t) {
+        const real u0 = at_t[t], u1 = t ? (at_t[t] + c) + d : at_t[t] + c;
+        sum[4 * t] = u0;
+        sum[4 * t + 2] = u1;
+        sum[4 * t + 1] = t ? (u0 + e) + g : u0 + e;
+        sum[4 * t + 3] = t ? (u1 + e) + g : u1 + e;
+      }
+      for (int corner = 0; corner < 8; ++corner) {
+        if (which)
+          error[corner][k] = sum[corner] * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY;
+        else
+          value[corner][k] = sum[corner];
+      }
+    }
+}
+
+inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
+                               real* farthest, real nearest[2], real* first, real spread[3])
+{
+  real value[8][3], error[8][3];
+  cs_trilinear_corners(f, b, value, error);
+  return cs_trilinear_bounds_of(f, b, value, error, separation, width, farthest, nearest, first, spread);
+}
+
+/* cs_trilinear_bounds over the whole parameter box. */
+inline int cs_trilinear_root_bounds(const cs_trilinear* f, const real separation, real* width, real* farthest,
+                                    real nearest[2], real* first, real spread[3])
+{
+  real value[8][3], error[8][3];
+  cs_trilinear_root_corners(f, value, error);
+  return cs_trilinear_bounds_of(f, cs_root_box(), value, error, separation, width, farthest, nearest, first,
+                                spread);
 }
 
 #endif
