@@ -42,11 +42,11 @@ inline void cs_lower_earliest(__global uint* earliest, const uint object, const 
 
 CS_DEFINE_STREAM_ITEM(uint4)
 
-/* Every contact stream of a step in one launch. Objects are few and contacts many, so
+/* Every contact stream of a step in one launch; a stream's vertex_face: its contacts are
+ * of a vertex and a face, else of two edges. Objects are few and contacts many, so
  * atomics on one object's word queue up: a group takes the minimum over the objects of
  * its first contact in local memory first (a group's contacts mostly share them: the
  * cloth and the ball on cloth-ball), and reaches their words once. */
-/* vertex_face: a stream's contacts are of a vertex and a face, else of two edges. */
 CS_GROUP_KERNEL void cs_earliest_toi(CS_FOUR_STREAMS(uint4), __global const uint* faces, __global const uint* edges,
                                      __global const uint* vertex_object, __global uint* earliest)
 {

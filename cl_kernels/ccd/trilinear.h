@@ -105,7 +105,8 @@ inline int cs_most_varied(const real spread[3])
   return spread[0] >= spread[1] ? (spread[0] >= spread[2] ? 0 : 2) : (spread[1] >= spread[2] ? 1 : 2);
 }
 
-/* Bounds F over the box. Returns 0 when F certainly stays farther than `separation`
+/* Bounds F over the box b from its values and error bounds at b's corners
+ * (cs_trilinear_corners). Returns 0 when F certainly stays farther than `separation`
  * from zero there: along the coordinate axes, along F at the box centre, or along the
  * face (or edge pair) normal at the box's middle time. Otherwise sets *width to the
  * widest side of the bounding box of F, *farthest to the largest |F_k| it allows,
@@ -247,6 +248,7 @@ inline void cs_trilinear_root_corners(const cs_trilinear* f, real value[8][3], r
     }
 }
 
+/* cs_trilinear_bounds_of, F evaluated at b's corners. */
 inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real separation, real* width,
                                real* farthest, real nearest[2], real* first, real spread[3])
 {
@@ -255,7 +257,7 @@ inline int cs_trilinear_bounds(const cs_trilinear* f, const cs_box b, const real
   return cs_trilinear_bounds_of(f, b, value, error, separation, width, farthest, nearest, first, spread);
 }
 
-/* cs_trilinear_bounds over the whole parameter box. */
+/* cs_trilinear_bounds over the whole parameter box (the conservative screen). */
 inline int cs_trilinear_root_bounds(const cs_trilinear* f, const real separation, real* width, real* farthest,
                                     real nearest[2], real* first, real spread[3])
 {

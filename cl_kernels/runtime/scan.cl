@@ -92,8 +92,8 @@ CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __glob
 }
 
 /* The whole scan by one group, tile after tile, where the input is a few tiles long: one
- * launch where the three kernels above take three, each costing its launch and tail
- * (H100: 4-8 us each, for the few thousand segment counts of an emitting pass). */
+ * launch where the kernels above take three, each costing its launch and its tail (4-8
+ * us each on the H100). */
 CS_GROUP_KERNEL void cs_scan_in_one_group(__global const uint* in, const uint n, __global uint* out,
                                           __global uint* counters, const uint total_slot)
 {

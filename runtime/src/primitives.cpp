@@ -27,8 +27,8 @@ std::size_t scan_items_for(const Context& context)
 std::string scan_options(const Context& context) { return "-DCS_SCAN_ITEMS=" + std::to_string(scan_items_for(context)); }
 
 // Inputs of up to this many tiles are scanned by one group, tile after tile, in one
-// launch: a group scans a tile in about a microsecond on the H100, where each of the
-// three launches of a longer scan costs 4-8.
+// launch instead of three (each of which cost 4-8 us on the H100 for inputs this
+// short).
 constexpr std::size_t one_group_tiles = 4;
 }  // namespace
 

@@ -166,8 +166,6 @@ RefitPlan plan_refit(const SceneLayout& layout, std::size_t group)
 {
   RefitPlan plan;
   if (layout.levels.size() < 2) return plan;
-  // As many levels a launch as keep a group's deepest one within its work-items where
-  // the tree is full.
   std::size_t levels = 1;
   while ((std::size_t(1) << levels) <= group) ++levels;
   for (std::size_t end = layout.levels.size() - 1; end > 0;) {
@@ -175,7 +173,7 @@ RefitPlan plan_refit(const SceneLayout& layout, std::size_t group)
     plan.bands.push_back({top, end - top, plan.ranges.size()});
     for (std::uint32_t n = layout.levels[top]; n < layout.levels[top + 1]; ++n) {
       std::array<std::uint32_t, 2> range{n, n + 1};
-      for (std::size_t d = top; d < end; ++d) {
+      for (std::size_t level = top; level < end; ++level) {
         plan.ranges.push_back(range);
         std::array<std::uint32_t, 2> below{0, 0};
         for (std::uint32_t m = range[0]; m < range[1]; ++m)
