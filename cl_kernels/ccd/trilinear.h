@@ -77,16 +77,19 @@ inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
   return f;
 }
 
+/* The error bound of F_k at a point from e, the error weights' sum there. That sum is
+ * of non-negative terms: eleven roundings at most, covered by 8 CS_EPS; and up to eleven
+ * results flushed to zero in the value and as many in the error. */
+inline real cs_trilinear_error(const real e) { return e * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY; }
+
 /* F_k at parameters t, u, v >= 0 as computed, and *error, the bound on how far the
  * exact F_k lies from it. */
 inline real cs_trilinear_at(const cs_trilinear* f, const int k, const real t, const real u, const real v,
                             real* error)
 {
   const real tu = t * u, tv = t * v;
-  /* A sum of non-negative terms: eleven roundings at most, covered by 8 CS_EPS; and
-   * up to eleven results flushed to zero in the value and as many in the error. */
   const real e = f->w[0][k] + t * f->w[1][k] + u * f->w[2][k] + tu * f->w[3][k] + v * f->w[4][k] + tv * f->w[5][k];
-  *error = e * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY;
+  *error = cs_trilinear_error(e);
   return f->c[0][k] + t * f->c[1][k] + u * f->c[2][k] + tu * f->c[3][k] + v * f->c[4][k] + tv * f->c[5][k];
 }
 
@@ -218,34 +221,33 @@ inline void cs_trilinear_corners(const cs_trilinear* f, const cs_box b, real val
   }
 }
 
-/* The same at the corners of the whole parameter box, where t, u and v are 0 or 1: every
- * product is exact, and a term that is zero adds nothing to cs_trilinear_at's sum. So
- * the sums below, in its order and without those terms, are the same to the bit, for a
- * fifth of its arithmetic: partial sums are shared between corners. */
+/* Coordinate k of cs_trilinear_at's sum, ((((a + t b) + u c) + t u d) + v e) + t v g
+ * with (a, ..., g) = x[0..5][k], at the corners of the whole parameter box. There t, u
+ * and v are 0 or 1: every product is exact and a term that is zero adds nothing, so
+ * these sums, in the same order without those terms, are the same to the bit, for a
+ * fifth of the arithmetic: partial sums are shared between corners. */
+inline void cs_root_corner_sums(const real x[6][3], const int k, real sum[8])
+{
+  const real at_t[2] = {x[0][k], x[0][k] + x[1][k]};
+  for (int t = 0; t < 2; ++t) {
+    const real u0 = at_t[t], u1 = t ? (u0 + x[2][k]) + x[3][k] : u0 + x[2][k];
+    sum[4 * t] = u0;
+    sum[4 * t + 2] = u1;
+    sum[4 * t + 1] = t ? (u0 + x[4][k]) + x[5][k] : u0 + x[4][k];
+    sum[4 * t + 3] = t ? (u1 + x[4][k]) + x[5][k] : u1 + x[4][k];
+  }
+}
+
+/* cs_trilinear_corners at the corners of the whole parameter box. */
 inline void cs_trilinear_root_corners(const cs_trilinear* f, real value[8][3], real error[8][3])
 {
-  for (int k = 0; k < 3; ++k)
-    for (int which = 0; which < 2; ++which) {
-      const real a = which ? f->w[0][k] : f->c[0][k], b = which ? f->w[1][k] : f->c[1][k],
-                 c = which ? f->w[2][k] : f->c[2][k], d = which ? f->w[3][k] : f->c[3][k],
-                 e = which ? f->w[4][k] : f->c[4][k], g = which ? f->w[5][k] : f->c[5][k];
-      /* Corner (t, u, v): ((((a + t b) + u c) + t u d) + v e) + t v g. */
-      const real at_t[2] = {a, a + b};
-      real sum[8];
-      for (int t = 0; t < 2; ++t) {
-        const real u0 = at_t[t], u1 = t ? (at_t[t] + c) + d : at_t[t] + c;
-        sum[4 * t] = u0;
-        sum[4 * t + 2] = u1;
-        sum[4 * t + 1] = t ? (u0 + e) + g : u0 + e;
-        sum[4 * t + 3] = t ? (u1 + e) + g : u1 + e;
-      }
-      for (int corner = 0; corner < 8; ++corner) {
-        if (which)
-          error[corner][k] = sum[corner] * ((real)1 + (real)8 * CS_EPS) + (real)32 * CS_TINY;
-        else
-          value[corner][k] = sum[corner];
-      }
-    }
+  for (int k = 0; k < 3; ++k) {
+    real sum[8];
+    cs_root_corner_sums(f->c, k, sum);
+    for (int c = 0; c < 8; ++c) value[c][k] = sum[c];
+    cs_root_corner_sums(f->w, k, sum);
+    for (int c = 0; c < 8; ++c) error[c][k] = cs_trilinear_error(sum[c]);
+  }
 }
 
 /* cs_trilinear_bounds_of, F evaluated at b's corners. */
