@@ -145,23 +145,42 @@ const Buffer& Sorter::sort(const Buffer& records, std::size_t n, Timeline* timel
 const Buffer& Sorter::sort(const Buffer& records, const Buffer& scratch, std::size_t n, Timeline* timeline,
                            const char* label)
 {
+  check_sortable(scratch, n, label);
+  if (n < 2) return records;
+  const std::size_t wg = context_.work_group_size();
+  blocks_.set_args(records, cl_uint(n), cl_uint(block_));
+  blocks_.set_local(3, block_local_bytes());
+  context_.launch(blocks_, (n + block_ - 1) / block_ * wg, wg, timeline, label);
+  return merge(records, scratch, n, merge_passes(n), timeline, label);
+}
+
+void Sorter::check_sortable(const Buffer& scratch, std::size_t n, const char* label) const
+{
   if (n >= (std::size_t(1) << 31))
     throw Error(std::string(label) + ": " + std::to_string(n) + " records, the sort takes fewer than 2^31");
   if (scratch.bytes() < scratch_bytes_for(n))
     throw Error(std::string(label) + ": " + std::to_string(scratch.bytes()) + " bytes of scratch for " +
                 std::to_string(n) + " records, which take " + std::to_string(scratch_bytes_for(n)));
-  if (n < 2) return records;
+}
+
+std::size_t Sorter::merge_passes(std::size_t n) const
+{
+  std::size_t passes = 0;
+  for (std::size_t width = block_; width < n; width *= 2) ++passes;
+  return passes;
+}
+
+const Buffer& Sorter::merge(const Buffer& records, const Buffer& scratch, std::size_t n, std::size_t passes,
+                            Timeline* timeline, const char* label)
+{
+  check_sortable(scratch, n, label);
   const std::size_t wg = context_.work_group_size();
   const std::size_t groups = (n + block_ - 1) / block_;
-  blocks_.set_args(records, cl_uint(n), cl_uint(block_));
-  blocks_.set_local(3, block_ * words_ * sizeof(cl_uint));
-  context_.launch(blocks_, groups * wg, wg, timeline, label);
-  if (block_ >= n) return records;
   const Buffer* in = &records;
   const Buffer* out = &scratch;
-  for (std::size_t width = block_; width < n; width *= 2) {
-    merge_.set_args(*in, *out, cl_uint(n), cl_uint(width), cl_uint(block_));
-    merge_.set_local(5, block_ * words_ * sizeof(cl_uint));
+  for (std::size_t pass = 0; pass < passes; ++pass) {
+    merge_.set_args(*in, *out, cl_uint(n), cl_uint(block_ << pass), cl_uint(block_));
+    merge_.set_local(5, block_local_bytes());
     context_.launch(merge_, groups * wg, wg, timeline, label);
     std::swap(in, out);
   }

@@ -13,13 +13,13 @@ namespace cstreams {
 
 namespace {
 
-constexpr std::size_t record_words = 8;  // cs_contact_records
+constexpr std::size_t record_words = 8;  // CS_SORT_WORDS of ccd/contacts.cl
 
-// cs_contacts_as_host writes Contacts word by word; the host reads them in place.
+// cs_store_contact writes Contacts word by word; the host reads them in place.
 static_assert(std::is_trivially_copyable_v<Contact> && std::is_standard_layout_v<Contact>);
 static_assert(sizeof(ContactKind) == 1 && sizeof(Contact) == 40 && offsetof(Contact, object_a) == 4 &&
                   offsetof(Contact, object_b) == 8 && offsetof(Contact, v) == 12 && offsetof(Contact, toi) == 32,
-              "Contact's layout is the one cs_contacts_as_host writes");
+              "Contact's layout is the one cs_store_contact writes");
 
 }  // namespace
 
@@ -27,8 +27,8 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
                                  Precision precision)
     : context_(context),
       double_time_(precision == Precision::double_),
-      make_records_(context.programs().kernel("ccd/contacts.cl", "cs_contact_records")),
-      as_host_(context.programs().kernel("ccd/contacts.cl", "cs_contacts_as_host")),
+      sort_blocks_(context.programs().kernel("ccd/contacts.cl", "cs_contact_sort_blocks")),
+      merge_last_(context.programs().kernel("ccd/contacts.cl", "cs_contacts_merged")),
       sorter_(context, record_words)
 {
   std::vector<cl_uint> first_vertex(scene.objects.size());
@@ -65,22 +65,32 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   runtime::Timeline timeline;
   runtime::Timeline* events = profile ? &timeline : nullptr;
   const std::uint64_t launches = context_.kernel_launches();
+  sorter_.check_sortable(sort_scratch, n, stats.name.c_str());
   unsigned a = 0;
   bind_four_streams(streams.contacts, "contact records", [&](runtime::StreamId stream, bool used, cl_uint vertex_face) {
-    make_records_.set_arg(a++, scheduler.buffer(stream));
-    make_records_.set_arg(a++, cl_uint(used ? scheduler.count(stream) : 0));
-    make_records_.set_arg(a++, vertex_face);
+    sort_blocks_.set_arg(a++, scheduler.buffer(stream));
+    sort_blocks_.set_arg(a++, cl_uint(used ? scheduler.count(stream) : 0));
+    sort_blocks_.set_arg(a++, vertex_face);
   });
-  make_records_.set_arg(a++, cl_uint(double_time_));
-  make_records_.set_arg(a++, scheduler.buffer(streams.faces));
-  make_records_.set_arg(a++, scheduler.buffer(streams.edges));
-  make_records_.set_arg(a++, scheduler.buffer(streams.vertex_object));
-  make_records_.set_arg(a++, first_vertex_);
-  make_records_.set_arg(a++, records);
-  context_.launch(make_records_, n, context_.work_group_size(), events, stats.name);
-  const runtime::Buffer& sorted = sorter_.sort(records, sort_scratch, n, events, stats.name.c_str());
-  as_host_.set_args(sorted, cl_uint(n), cl_uint(double_time_), contacts);
-  context_.launch(as_host_, n, context_.work_group_size(), events, stats.name);
+  sort_blocks_.set_arg(a++, cl_uint(double_time_));
+  sort_blocks_.set_arg(a++, scheduler.buffer(streams.faces));
+  sort_blocks_.set_arg(a++, scheduler.buffer(streams.edges));
+  sort_blocks_.set_arg(a++, scheduler.buffer(streams.vertex_object));
+  sort_blocks_.set_arg(a++, first_vertex_);
+  sort_blocks_.set_arg(a++, cl_uint(n));
+  sort_blocks_.set_arg(a++, cl_uint(sorter_.block()));
+  sort_blocks_.set_arg(a++, records);
+  sort_blocks_.set_arg(a++, contacts);
+  sort_blocks_.set_local(a, sorter_.block_local_bytes());
+  const std::size_t wg = context_.work_group_size(), groups = (n + sorter_.block() - 1) / sorter_.block();
+  context_.launch(sort_blocks_, groups * wg, wg, events, stats.name);
+  if (const std::size_t passes = sorter_.merge_passes(n)) {
+    const runtime::Buffer& runs = sorter_.merge(records, sort_scratch, n, passes - 1, events, stats.name.c_str());
+    merge_last_.set_args(runs, cl_uint(n), cl_uint(sorter_.block() << (passes - 1)), cl_uint(sorter_.block()),
+                         cl_uint(double_time_), contacts);
+    merge_last_.set_local(6, sorter_.block_local_bytes());
+    context_.launch(merge_last_, groups * wg, wg, events, stats.name);
+  }
   stats.launches = unsigned(context_.kernel_launches() - launches);
   runtime::ensure_capacity(context_, staging_, contact_bytes, "contacts");
   context_.read(contacts, staging_.data(), contact_bytes);

@@ -1,8 +1,8 @@
 #pragma once
 // The step's contacts as the user gets them, made on the device: every found pair
-// mapped to its objects and object-local vertex ids (ccd/contacts.cl), all kinds
-// sorted together into canonical order (runtime::Sorter), and read in one transfer
-// of exactly the contacts, laid out as the host's Contact (cs_contacts_as_host).
+// mapped to its objects and object-local vertex ids, all kinds sorted together into
+// canonical order (runtime::Sorter's passes, the first and last in ccd/contacts.cl),
+// and read in one transfer of exactly the contacts, laid out as the host's Contact.
 #include <cstreams/contacts.hpp>
 #include <cstreams/detector.hpp>
 #include <cstreams/pipeline/ccd_graph.hpp>
@@ -30,8 +30,8 @@ public:
 private:
   runtime::Context& context_;
   bool double_time_;
-  runtime::Kernel make_records_;
-  runtime::Kernel as_host_;
+  runtime::Kernel sort_blocks_;  // makes the records as it sorts them in blocks
+  runtime::Kernel merge_last_;   // writes Contacts as it merges the last runs
   runtime::Sorter sorter_;
   runtime::Buffer first_vertex_;  // per object
   runtime::HostStaging staging_;  // the Contacts as read, handed out in place

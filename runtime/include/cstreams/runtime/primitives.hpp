@@ -84,6 +84,20 @@ public:
   void reserve(std::size_t n);
   std::size_t scratch_bytes() const { return scratch_.bytes(); }
 
+  // The parts of sort() for a caller whose own kernels (built on runtime/sort.h) make
+  // the records as they sort the blocks, and write them out as they merge the last
+  // runs, saving a launch at either end: the records a work-group sorts, the local
+  // memory it sorts them in, and the merge passes that n records take after the blocks.
+  std::size_t block() const { return block_; }
+  std::size_t block_local_bytes() const { return block_ * words_ * sizeof(cl_uint); }
+  std::size_t merge_passes(std::size_t n) const;
+  // Throws unless n records can be sorted with `scratch` (sort() and merge() check too).
+  void check_sortable(const Buffer& scratch, std::size_t n, const char* label) const;
+  // The first `passes` merge passes over n records sorted in blocks: the buffer that
+  // then holds runs of block() << passes records, `records` or `scratch`.
+  const Buffer& merge(const Buffer& records, const Buffer& scratch, std::size_t n, std::size_t passes,
+                      Timeline* timeline, const char* label);
+
 private:
   Context& context_;
   std::size_t words_;
