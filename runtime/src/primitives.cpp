@@ -76,8 +76,9 @@ void Scan::level(const Buffer& in, const Buffer& out, std::size_t n, const Buffe
   const Buffer sums = levels_[depth];
   reduce_.set_args(in, count, sums);
   context_.launch(reduce_, tiles * wg, wg, timeline, label);
-  level(sums, sums, tiles, counters, no_slot, depth + 1, timeline, label);
-  tiles_.set_args(in, count, out, sums, cl_uint(1), counters, slot);
+  const bool summed = tiles <= tile_items();
+  if (!summed) level(sums, sums, tiles, counters, no_slot, depth + 1, timeline, label);
+  tiles_.set_args(in, count, out, sums, cl_uint(summed), counters, slot);
   context_.launch(tiles_, tiles * wg, wg, timeline, label);
 }
 

@@ -142,16 +142,18 @@ TEST_CASE("a scan of a few tiles takes one launch, and is right in place", "[run
     CHECK(launches(n) == 1);
     check_scan(n, true);
   }
-  // Beyond: the tiles' sums, their scan (one launch) and the tiles.
-  CHECK(launches(4 * tile + 1) == 3);
+  // Beyond: the tiles' sums, then the tiles, each group adding up the sums before it.
+  CHECK(launches(4 * tile + 1) == 2);
   check_scan(4 * tile + 1, true);
 }
 
 TEST_CASE("exclusive scan equals the host's at millions of items", "[runtime][scan][slow]")
 {
   for (std::size_t n : {std::size_t(1) << 22, (std::size_t(1) << 22) + 1, std::size_t(5'000'011)}) check_scan(n, false);
-  // Three recursion levels: more tiles than one tile can scan.
-  check_scan(std::size_t(9'000'001), true);
+  // More tiles than one tile holds the sums of: those sums are scanned first, as a
+  // scan of their own.
+  const std::size_t tile = Scan(cstreams::test::device()).tile_items();
+  check_scan(tile * tile + 1, true);
 }
 
 TEST_CASE("compaction keeps flagged items in order and counts past capacity", "[runtime][compaction][quick]")
