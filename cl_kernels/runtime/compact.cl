@@ -1,31 +1,10 @@
-/* Packing kernels the scheduler inserts: the scatter of a compaction and the merge
- * of registration segments. Items are copied as `words` 32-bit words, so one kernel
- * serves every element type. Writes past `capacity` are dropped; the count in the
- * counter slot still says how many there were, and the host grows and reruns. */
+/* Packing kernels the scheduler inserts: the merge of registration segments (a
+ * compaction's scatter is part of its scan, scan.cl). Writes past `capacity` are
+ * dropped; the count in the counter slot still says how many there were, and the host
+ * grows and reruns. */
 #include "common.h"
+#include "copy.h"
 #include "registration.h"
-
-/* Items of two and four words (pairs, contacts) move as one vector: word by word, each
- * load of a warp spans twice or four times the bytes it uses. */
-inline void cs_copy_item(__global const uint* src, size_t from, __global uint* dst, size_t to, uint words)
-{
-  if (words == 2u) {
-    ((__global uint2*)dst)[to] = ((__global const uint2*)src)[from];
-  } else if (words == 4u) {
-    ((__global uint4*)dst)[to] = ((__global const uint4*)src)[from];
-  } else {
-    for (uint w = 0; w < words; ++w) dst[to * words + w] = src[from * words + w];
-  }
-}
-
-__kernel void cs_scatter(__global const uint* src, const uint words, __global const uint* keep,
-                         __global const uint* offsets, const uint n, __global uint* dst, const uint capacity)
-{
-  const size_t i = get_global_id(0);
-  if (i >= n || !keep[i]) return;
-  const uint o = offsets[i];
-  if (o < capacity) cs_copy_item(src, i, dst, o, words);
-}
 
 /* Lock-free per-thread segments: segment s holds counts[s] items, its item j at
  * j * segments + s, so that threads writing their j-th item together touch

@@ -2,10 +2,13 @@
  * each tile starting from its tile's offset, which each group adds up from the tile
  * sums before it where they fit one tile, and which the host otherwise scans the same
  * way first, recursively; or, for a few tiles, in one kernel by one group
- * (cs_scan_in_one_group).
+ * (cs_scan_in_one_group). A compaction is the scan of its keep flags, whose last
+ * launch (cs_compact_tiles, cs_compact_in_one_group) copies each kept item to its place
+ * rather than writing the offsets: a launch and the offsets' memory fewer.
  * Work-items cooperate only through local memory and barriers: nothing assumes
  * they run in lockstep, so the same code is right on pocl, NVIDIA and AMD. */
 #include "common.h"
+#include "copy.h"
 
 #ifndef CS_SCAN_ITEMS
 #error "CS_SCAN_ITEMS (items per work-item) is chosen by the host's Scan for the device"
@@ -46,11 +49,11 @@ CS_GROUP_KERNEL void cs_scan_reduce(__global const uint* in, const uint n, __glo
   if (get_local_id(0) == 0) tile_sums[get_group_id(0)] = total;
 }
 
-/* Scans the tile at `base` starting from `offset` and returns offset plus the tile's sum.
- * `in` and `out` may be the same buffer: the group reads its whole tile before writing
- * it. Ends with a barrier, so the group may go on to another tile. */
-inline uint cs_scan_tile(__global const uint* in, const uint n, __global uint* out, const size_t base,
-                         const uint offset, __local uint* tile, __local uint* scratch)
+/* Scans the tile at `base` of `in` into local memory, starting from `offset`, and
+ * returns offset plus the tile's sum; tile[CS_PAD(t)] then holds the offset of item
+ * base + t. */
+inline uint cs_scan_tile_locally(__global const uint* in, const uint n, const size_t base, const uint offset,
+                                 __local uint* tile, __local uint* scratch)
 {
   const uint lid = get_local_id(0);
   for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
@@ -71,13 +74,38 @@ inline uint cs_scan_tile(__global const uint* in, const uint n, __global uint* o
     running += v;
   }
   barrier(CLK_LOCAL_MEM_FENCE);
+  return offset + group_total;
+}
 
+/* Scans the tile at `base` starting from `offset` and returns offset plus the tile's sum.
+ * `in` and `out` may be the same buffer: the group reads its whole tile before writing
+ * it. Ends with a barrier, so the group may go on to another tile. */
+inline uint cs_scan_tile(__global const uint* in, const uint n, __global uint* out, const size_t base,
+                         const uint offset, __local uint* tile, __local uint* scratch)
+{
+  const uint end = cs_scan_tile_locally(in, n, base, offset, tile, scratch);
   for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
-    const uint t = k * CS_WG_SIZE + lid;
+    const uint t = k * CS_WG_SIZE + get_local_id(0);
     if (base + t < n) out[base + t] = tile[CS_PAD(t)];
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-  return offset + group_total;
+  return end;
+}
+
+/* The same over the keep flags of a compaction, copying each kept item of `src`
+ * (items of `words` words) to its place in `dst`, those past `capacity` dropped. */
+inline uint cs_compact_tile(__global const uint* keep, const uint n, const size_t base, const uint offset,
+                            __global const uint* src, const uint words, __global uint* dst, const uint capacity,
+                            __local uint* tile, __local uint* scratch)
+{
+  const uint end = cs_scan_tile_locally(keep, n, base, offset, tile, scratch);
+  for (uint k = 0; k < CS_SCAN_ITEMS; ++k) {
+    const uint t = k * CS_WG_SIZE + get_local_id(0);
+    const uint o = tile[CS_PAD(t)];
+    if (base + t < n && keep[base + t] && o < capacity) cs_copy_item(src, base + t, dst, o, words);
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return end;
 }
 
 /* The sum of values[0, count) over the work-group, in every work-item. */
@@ -106,6 +134,19 @@ CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __glob
     counters[total_slot] = end;
 }
 
+CS_GROUP_KERNEL void cs_compact_tiles(__global const uint* keep, const uint n, __global const uint* src,
+                                      const uint words, __global uint* dst, const uint capacity,
+                                      __global const uint* tile_offsets, const uint summed,
+                                      __global uint* counters, const uint total_slot)
+{
+  __local uint tile[CS_PAD(CS_SCAN_TILE)];
+  __local uint scratch[CS_WG_SIZE];
+  const uint g = get_group_id(0);
+  const uint offset = summed ? cs_group_sum(tile_offsets, g, scratch) : tile_offsets[g];
+  const uint end = cs_compact_tile(keep, n, g * (size_t)CS_SCAN_TILE, offset, src, words, dst, capacity, tile, scratch);
+  if (get_local_id(0) == 0 && g == get_num_groups(0) - 1) counters[total_slot] = end;
+}
+
 /* The whole scan by one group, tile after tile, where the input is a few tiles long: one
  * launch where the kernels above take three, each costing its launch and its tail (4-8
  * us each on the H100). */
@@ -117,4 +158,16 @@ CS_GROUP_KERNEL void cs_scan_in_one_group(__global const uint* in, const uint n,
   uint end = 0;
   for (size_t base = 0; base < n; base += CS_SCAN_TILE) end = cs_scan_tile(in, n, out, base, end, tile, scratch);
   if (total_slot != CS_NO_SLOT && get_local_id(0) == 0) counters[total_slot] = end;
+}
+
+CS_GROUP_KERNEL void cs_compact_in_one_group(__global const uint* keep, const uint n, __global const uint* src,
+                                             const uint words, __global uint* dst, const uint capacity,
+                                             __global uint* counters, const uint total_slot)
+{
+  __local uint tile[CS_PAD(CS_SCAN_TILE)];
+  __local uint scratch[CS_WG_SIZE];
+  uint end = 0;
+  for (size_t base = 0; base < n; base += CS_SCAN_TILE)
+    end = cs_compact_tile(keep, n, base, end, src, words, dst, capacity, tile, scratch);
+  if (get_local_id(0) == 0) counters[total_slot] = end;
 }

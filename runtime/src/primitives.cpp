@@ -27,8 +27,8 @@ std::size_t scan_items_for(const Context& context)
 std::string scan_options(const Context& context) { return "-DCS_SCAN_ITEMS=" + std::to_string(scan_items_for(context)); }
 
 // Inputs of up to this many tiles are scanned by one group, tile after tile, in one
-// launch instead of three (each of which cost 4-8 us on the H100 for inputs this
-// short).
+// launch instead of two (the tile sums, then the tiles; each cost 4-8 us on the H100
+// for inputs this short).
 constexpr std::size_t one_group_tiles = 4;
 }  // namespace
 
@@ -37,7 +37,9 @@ Scan::Scan(Context& context)
       items_per_work_item_(scan_items_for(context)),
       reduce_(context.programs().kernel("runtime/scan.cl", "cs_scan_reduce", scan_options(context))),
       tiles_(context.programs().kernel("runtime/scan.cl", "cs_scan_tiles", scan_options(context))),
-      one_group_(context.programs().kernel("runtime/scan.cl", "cs_scan_in_one_group", scan_options(context)))
+      one_group_(context.programs().kernel("runtime/scan.cl", "cs_scan_in_one_group", scan_options(context))),
+      compact_tiles_(context.programs().kernel("runtime/scan.cl", "cs_compact_tiles", scan_options(context))),
+      compact_one_group_(context.programs().kernel("runtime/scan.cl", "cs_compact_in_one_group", scan_options(context)))
 {
 }
 
@@ -57,18 +59,36 @@ void Scan::exclusive(const Buffer& in, const Buffer& out, std::size_t n, const B
     if (slot != no_slot) context_.fill_u32(counters, 0, slot, 1, timeline);
     return;
   }
-  level(in, out, n, counters, slot, 0, timeline, label);
+  level(in, out, n, counters, slot, 0, nullptr, timeline, label);
+}
+
+void Scan::compact(const Buffer& src, std::size_t words, const Buffer& keep, std::size_t n, const Buffer& dst,
+                   std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline,
+                   const char* label)
+{
+  if (n == 0) {
+    context_.fill_u32(counters, 0, slot, 1, timeline);
+    return;
+  }
+  const Placement placement{&src, words, &dst, capacity};
+  level(keep, keep, n, counters, slot, 0, &placement, timeline, label);
 }
 
 void Scan::level(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
-                 std::size_t depth, Timeline* timeline, const char* label)
+                 std::size_t depth, const Placement* placement, Timeline* timeline, const char* label)
 {
   const std::size_t wg = context_.work_group_size();
   const std::size_t tiles = (n + tile_items() - 1) / tile_items();
   const cl_uint count = cl_uint(n);
   if (tiles <= one_group_tiles) {
-    one_group_.set_args(in, count, out, counters, slot);
-    context_.launch(one_group_, wg, wg, timeline, label);
+    if (placement) {
+      compact_one_group_.set_args(in, count, *placement->src, cl_uint(placement->words), *placement->dst,
+                                  cl_uint(placement->capacity), counters, slot);
+      context_.launch(compact_one_group_, wg, wg, timeline, label);
+    } else {
+      one_group_.set_args(in, count, out, counters, slot);
+      context_.launch(one_group_, wg, wg, timeline, label);
+    }
     return;
   }
   if (levels_.size() <= depth) levels_.resize(depth + 1);
@@ -77,24 +97,15 @@ void Scan::level(const Buffer& in, const Buffer& out, std::size_t n, const Buffe
   reduce_.set_args(in, count, sums);
   context_.launch(reduce_, tiles * wg, wg, timeline, label);
   const bool summed = tiles <= tile_items();
-  if (!summed) level(sums, sums, tiles, counters, no_slot, depth + 1, timeline, label);
-  tiles_.set_args(in, count, out, sums, cl_uint(summed), counters, slot);
-  context_.launch(tiles_, tiles * wg, wg, timeline, label);
-}
-
-Compactor::Compactor(Context& context, Scan& scan)
-    : context_(context), scan_(scan), scatter_(context.programs().kernel("runtime/compact.cl", "cs_scatter"))
-{
-}
-
-void Compactor::compact(const Buffer& src, std::size_t words, const Buffer& keep, std::size_t n, const Buffer& dst,
-                        std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline,
-                        const char* label)
-{
-  ensure_capacity(context_, offsets_, n * sizeof(cl_uint), "compaction offsets");
-  scan_.exclusive(keep, offsets_, n, counters, slot, timeline, label);
-  scatter_.set_args(src, cl_uint(words), keep, offsets_, cl_uint(n), dst, cl_uint(capacity));
-  context_.launch(scatter_, n, context_.work_group_size(), timeline, label);
+  if (!summed) level(sums, sums, tiles, counters, no_slot, depth + 1, nullptr, timeline, label);
+  if (placement) {
+    compact_tiles_.set_args(in, count, *placement->src, cl_uint(placement->words), *placement->dst,
+                            cl_uint(placement->capacity), sums, cl_uint(summed), counters, slot);
+    context_.launch(compact_tiles_, tiles * wg, wg, timeline, label);
+  } else {
+    tiles_.set_args(in, count, out, sums, cl_uint(summed), counters, slot);
+    context_.launch(tiles_, tiles * wg, wg, timeline, label);
+  }
 }
 
 namespace {

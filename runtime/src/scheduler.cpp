@@ -131,7 +131,7 @@ std::string registration_define(Registration r)
 
 struct Scheduler::State {
   State(Context& c, StreamGraph g, SchedulerOptions o)
-      : context(c), graph(std::move(g)), options(o), scan(c), compactor(c, scan),
+      : context(c), graph(std::move(g)), options(o), scan(c),
         merge_interleaved(c.programs().kernel("runtime/compact.cl", "cs_merge_interleaved")),
         merge_planned(c.programs().kernel("runtime/compact.cl", "cs_merge_planned")),
         no_plan(c, sizeof(cl_uint), "registration plan"), arena(c)
@@ -142,7 +142,6 @@ struct Scheduler::State {
   StreamGraph graph;
   SchedulerOptions options;
   Scan scan;
-  Compactor compactor;
   Kernel merge_interleaved, merge_planned;
   Buffer offsets;  // lock-free segments' offsets
   Buffer no_plan;  // one zero: the plan of segments that have none
@@ -837,8 +836,8 @@ struct Scheduler::State {
     if (p.spec->culls()) {
       auto& dst = state(p.spec->cull_target);
       with_memory([&] {
-        compactor.compact(state(p.spec->cull_source).buffer, words(p.spec->cull_source), p.keep, n, dst.buffer,
-                          dst.capacity, counters, dst.slot, tl(), label.c_str());
+        scan.compact(state(p.spec->cull_source).buffer, words(p.spec->cull_source), p.keep, n, dst.buffer,
+                     dst.capacity, counters, dst.slot, tl(), label.c_str());
       });
     }
   }
@@ -1475,7 +1474,7 @@ struct Scheduler::State {
     std::uint64_t pass_total = 0;
     // Segments are shared between stages: the run's total counts each buffer once, and
     // once the run is over they are all idle.
-    stats.scratch_bytes = scan.scratch_bytes() + compactor.scratch_bytes() + offsets.bytes();
+    stats.scratch_bytes = scan.scratch_bytes() + offsets.bytes();
     for (const auto& idle : idle_segments) stats.segment_bytes += idle.bytes();
     // The arena, less the transient streams that it holds (counted as theirs).
     std::size_t in_streams = 0;

@@ -68,7 +68,6 @@ try {
   std::printf("|--------------|------------------------|-----------:|----------:|----------:|----------:|\n");
 
   Scan scan(ctx);
-  Compactor compactor(ctx, scan);
   BoostComputeBaselines boost(ctx);
   const Kernel flag_odd = ctx.programs().kernel("kernels/stream_test.cl", "test_flag_odd", "-DCS_REGISTRATION=2");
 
@@ -98,7 +97,7 @@ try {
     const double compact_ours = median_ms(repeat, [&] {
       flag_odd.set_args(in, cl_uint(n), flags);
       ctx.launch(flag_odd, n, ctx.work_group_size());
-      compactor.compact(in, 1, flags, n, out, n, counters, 0);
+      scan.compact(in, 1, flags, n, out, n, counters, 0);
       ctx.finish();
     });
     cl_uint kept = 0;

@@ -54,7 +54,6 @@ void check_compaction(std::size_t n, std::size_t capacity_factor_percent)
 {
   auto& ctx = cstreams::test::device();
   Scan scan(ctx);
-  Compactor compactor(ctx, scan);
   // Two-word items check that whole elements move, not words.
   std::vector<cl_uint> items(2 * n);
   std::vector<cl_uint> keep = random_values(n, std::uint32_t(n) + 7, 1);
@@ -68,7 +67,7 @@ void check_compaction(std::size_t n, std::size_t capacity_factor_percent)
   Buffer src(ctx, n * 8, "src"), flags(ctx, n * 4, "flags"), dst(ctx, capacity * 8, "dst"), counters(ctx, 4, "c");
   ctx.write(src, items.data(), n * 8);
   ctx.write(flags, keep.data(), n * 4);
-  compactor.compact(src, 2, flags, n, dst, capacity, counters, 0);
+  scan.compact(src, 2, flags, n, dst, capacity, counters, 0);
   cl_uint count = 0;
   ctx.read(counters, &count, 4);
   std::vector<cl_uint> result(2 * std::min(capacity, kept));
@@ -167,6 +166,9 @@ TEST_CASE("compaction at millions of items", "[runtime][compaction][slow]")
 {
   check_compaction(std::size_t(1) << 22, 100);
   check_compaction(3'000'017, 100);
+  // More tiles than one tile holds the sums of: the placing launch takes scanned sums.
+  const std::size_t tile = Scan(cstreams::test::device()).tile_items();
+  check_compaction(tile * tile + 1, 50);
 }
 
 TEST_CASE("device reads land whole in host staging memory, which grows and moves", "[runtime][staging][quick]")

@@ -14,8 +14,9 @@ class Context;
 // Counter-slot value meaning "write no total" (CS_NO_SLOT in the kernels).
 constexpr std::uint32_t no_slot = 0xffffffffu;
 
-// Exclusive prefix sum of 32-bit unsigned integers on the device. Scratch for the
-// tile sums of each recursion level is kept and only ever grows.
+// Exclusive prefix sum of 32-bit unsigned integers on the device, and the stream
+// compaction built on it. Scratch for the tile sums of each recursion level is kept and
+// only ever grows.
 class Scan {
 public:
   explicit Scan(Context& context);
@@ -24,40 +25,36 @@ public:
   // The sum of all n values goes to counters[slot] unless slot is no_slot.
   void exclusive(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
                  Timeline* timeline = nullptr, const char* label = "scan");
+  // Copies item i of `src` (items of `words` 32-bit words) for every i < n with
+  // keep[i] != 0 into `dst`, in order, which holds `capacity` items; items past
+  // capacity are dropped, and counters[slot] receives the number of kept items either
+  // way. The scan's last launch places the items, so no offsets are stored.
+  void compact(const Buffer& src, std::size_t words, const Buffer& keep, std::size_t n, const Buffer& dst,
+               std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline = nullptr,
+               const char* label = "compact");
   std::size_t scratch_bytes() const;
   // Items one tile of the scan covers; inputs of a few tiles take a single launch.
   std::size_t tile_items() const;
 
 private:
+  // Where a compaction puts what it keeps; a plain scan has none.
+  struct Placement {
+    const Buffer* src;
+    std::size_t words;
+    const Buffer* dst;
+    std::size_t capacity;
+  };
   void level(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
-             std::size_t depth, Timeline* timeline, const char* label);
+             std::size_t depth, const Placement* placement, Timeline* timeline, const char* label);
 
   Context& context_;
   std::size_t items_per_work_item_;
   Kernel reduce_;
   Kernel tiles_;
   Kernel one_group_;
+  Kernel compact_tiles_;
+  Kernel compact_one_group_;
   std::vector<Buffer> levels_;
-};
-
-// Stream compaction: keeps the items whose flag is non-zero, in order.
-class Compactor {
-public:
-  Compactor(Context& context, Scan& scan);
-
-  // Copies item i of `src` (items of `words` 32-bit words) for every i < n with
-  // keep[i] != 0 into `dst`, which holds `capacity` items; items past capacity are
-  // dropped, and counters[slot] receives the number of kept items either way.
-  void compact(const Buffer& src, std::size_t words, const Buffer& keep, std::size_t n, const Buffer& dst,
-               std::size_t capacity, const Buffer& counters, std::uint32_t slot, Timeline* timeline = nullptr,
-               const char* label = "compact");
-  std::size_t scratch_bytes() const { return offsets_.bytes(); }
-
-private:
-  Context& context_;
-  Scan& scan_;
-  Kernel scatter_;
-  Buffer offsets_;
 };
 
 // Sorts records of `words` 32-bit words, compared word by word as unsigned integers
