@@ -168,8 +168,12 @@ RefitPlan plan_refit(const SceneLayout& layout, std::size_t group)
   if (layout.levels.size() < 2) return plan;
   std::size_t levels = 1;
   while ((std::size_t(1) << levels) <= group) ++levels;
+  // The top band is one group's alone, which may take four nodes a work-item at its
+  // deepest level: two levels more, and a launch fewer where they are all that is left
+  // (n-body's level 0 took a launch of 4 us on the H100).
+  const std::size_t top_levels = levels + 2;
   for (std::size_t end = layout.levels.size() - 1; end > 0;) {
-    const std::size_t top = end > levels ? end - levels : 0;
+    const std::size_t top = end > top_levels ? end - levels : 0;
     plan.bands.push_back({top, end - top, plan.ranges.size()});
     for (std::uint32_t n = layout.levels[top]; n < layout.levels[top + 1]; ++n) {
       std::array<std::uint32_t, 2> range{n, n + 1};

@@ -77,7 +77,7 @@ struct RefitPlan {
   std::vector<std::array<std::uint32_t, 2>> ranges;
 };
 // As many levels a band as keep a group's deepest one within its `group` work-items
-// where the tree is full.
+// where the tree is full; the top band, from the roots, up to four nodes a work-item.
 RefitPlan plan_refit(const SceneLayout& layout, std::size_t group);
 
 // The streams of the CCD graph; those a scene does not need stay unset.
