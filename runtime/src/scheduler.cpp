@@ -454,13 +454,13 @@ struct Scheduler::State {
 
   // Grows a stream that pass `p` emits into, giving back registration segments when
   // the device has no memory left for it: first those of idle passes (with_memory),
-  // then the pass's own, which then emits this run through the global counter. Returns
-  // whether the pass must run again in full. A stream that does not fit even then is an
-  // error.
-  bool grow_output(PassState& p, StreamId s, std::size_t needed)
+  // then those that `make_room` gives back, then the pass's own, which then emits this
+  // run through the global counter. Returns whether the pass must run again in full. A
+  // stream that does not fit even then is an error.
+  template <class MakeRoom> bool grow_output(PassState& p, StreamId s, std::size_t needed, MakeRoom make_room)
   {
     try {
-      with_memory([&] { grow(s, needed); });
+      allocate_making_room([&] { with_memory([&] { grow(s, needed); }); }, make_room);
       return false;
     } catch (const DeviceMemoryExhausted&) {
     }
@@ -786,7 +786,7 @@ struct Scheduler::State {
       // Each emitter's segments fit alone; all of them together may not.
       if (p.mode != Registration::global_atomic) {
         try {
-          for (auto& e : p.emitters) prepare_segments(e, global);
+            for (auto& e : p.emitters) prepare_segments(e, global);
         } catch (const DeviceMemoryExhausted&) {
           fall_back_to_global_counter(p);
         }
@@ -1052,10 +1052,28 @@ struct Scheduler::State {
       busy.assign(overflowing.begin(), overflowing.end());
       if (overflowing.empty()) break;
       // Pass by pass, so that one packed again gives its segments back before the next
-      // one's outputs grow.
-      for (PassState* p : overflowing) try {
+      // one's outputs grow. Where even the idle scratch leaves no room for a pass's
+      // outputs, the overflowing passes after it give back their segments, which hold
+      // their items until they pack, and run again in full through the global counter:
+      // so a run that fits with every pass on the global counter fits (a cull's output
+      // had failed to grow beside the busy segments of the pass after it).
+      std::vector<PassState*> unpacked;
+      for (std::size_t k = 0; k < overflowing.size(); ++k) {
+        PassState* p = overflowing[k];
+        const auto later_segments_back = [&] {
+          bool freed = false;
+          for (std::size_t j = k + 1; j < overflowing.size(); ++j) {
+            PassState& q = *overflowing[j];
+            if (q.mode == Registration::global_atomic) continue;
+            fall_back_to_global_counter(q);
+            unpacked.push_back(&q);
+            freed = true;
+          }
+          return freed;
+        };
+        try {
         const bool atomic = p->mode == Registration::global_atomic;
-        Redo r = Redo::none;
+        Redo r = std::find(unpacked.begin(), unpacked.end(), p) != unpacked.end() ? Redo::full : Redo::none;
         for (auto& e : p->emitters) {
           auto& dst = state(e.stream);
           if (segments_overflowed(*p, e)) {
@@ -1066,14 +1084,15 @@ struct Scheduler::State {
             r = Redo::full;
           }
           if (outgrew(*p, e)) {
-            const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot]);
+            const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot], later_segments_back);
             r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
           }
         }
         if (p->spec->culls()) {
           auto& dst = state(p->spec->cull_target);
           if (host_counters[dst.slot] > dst.capacity) {
-            with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); });
+            allocate_making_room([&] { with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); }); },
+                                 later_segments_back);
             r = std::max(r, Redo::pack);
           }
         }
@@ -1083,9 +1102,10 @@ struct Scheduler::State {
         if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
                                             [&](const EmitterState& e) { return packs_late(*p, e); }))
           busy.erase(std::find(busy.begin(), busy.end(), p));
-      } catch (const DeviceMemoryExhausted&) {
-        out_of_memory(p);
-        throw;
+        } catch (const DeviceMemoryExhausted&) {
+          out_of_memory(p);
+          throw;
+        }
       }
     }
     finish(stage);
