@@ -24,10 +24,10 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
  * pool. Each of the first groups copies `per_group` neighbouring segments (at most
  * CS_MERGE_SEGMENTS and the group's size), the groups after them the spilled items, a
  * work-item each. A group first reads its segments' bounds, then copies them as one run
- * of items, each work-item walking forward through the group's segments. Segments hold
- * about one emitting group's items, often fewer than a group has work-items: one group
- * a segment left most work-items idle while tens of thousands of groups waited to be
- * dispatched (the H200 took 37 us for a front update's 19 MB of triangle pairs). A
+ * of items, each work-item walking forward through the group's segments two items at
+ * once (cs_copy_two_items). Segments hold about one emitting group's items, often fewer
+ * than a group has work-items: one group a segment left most work-items idle while
+ * tens of thousands of groups waited to be dispatched (the H200 took 37 us for a front update's 19 MB of triangle pairs). A
  * spilled item's group and rank follow the counts. Work-item 0 also completes
  * `offsets` with the total at [segments], so that they plan the next run's segments. */
 #define CS_MERGE_SEGMENTS 64u
@@ -59,10 +59,20 @@ __kernel void cs_merge_planned(__global const uint* items, const uint words, __g
   barrier(CLK_LOCAL_MEM_FENCE);
   if (g < groups) {
     uint s = 0;
-    for (uint j = lid; j < start[k]; j += size) {
-      while (start[s + 1u] <= j) ++s;
-      const uint o = to[s] + (j - start[s]);
-      if (o < capacity) cs_copy_item(items, from[s] + (j - start[s]), dst, o, words);
+    const uint total = start[k];
+    for (uint j = lid; j < total; j += 2u * size) {
+      uint from_at[2], to_at[2];
+      for (uint u = 0; u < 2u; ++u) {
+        const uint i = j + u * size;
+        from_at[u] = 0;
+        to_at[u] = capacity; /* past the group's items: nothing to copy */
+        if (i < total) {
+          while (start[s + 1u] <= i) ++s;
+          from_at[u] = from[s] + (i - start[s]);
+          to_at[u] = to[s] + (i - start[s]);
+        }
+      }
+      cs_copy_two_items(items, from_at, dst, to_at, capacity, words);
     }
   } else {
     const uint x = (g - groups) * size + lid;
