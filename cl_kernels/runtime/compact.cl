@@ -27,9 +27,10 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
  * of items, each work-item walking forward through the group's segments two items at
  * once (cs_copy_two_items). Segments hold about one emitting group's items, often fewer
  * than a group has work-items: one group a segment left most work-items idle while
- * tens of thousands of groups waited to be dispatched (the H200 took 37 us for a front update's 19 MB of triangle pairs). A
- * spilled item's group and rank follow the counts. Work-item 0 also completes
- * `offsets` with the total at [segments], so that they plan the next run's segments. */
+ * tens of thousands of groups waited to be dispatched (the H200 took 37 us for a front
+ * update's 19 MB of triangle pairs). A spilled item's group and rank follow the counts.
+ * Work-item 0 also completes `offsets` with the total at [segments], so that they plan
+ * the next run's segments. */
 #define CS_MERGE_SEGMENTS 64u
 __kernel void cs_merge_planned(__global const uint* items, const uint words, __global const uint* counts,
                                __global uint* offsets, const uint segments, __global const uint* plan,

@@ -108,30 +108,37 @@ inline uint cs_compact_tile(__global const uint* keep, const uint n, const size_
   return end;
 }
 
-/* The sum of values[0, count) over the work-group, in every work-item. */
-inline uint cs_group_sum(__global const uint* values, const uint count, __local uint* scratch)
+/* The offset of the group's tile: tile_offsets holds each tile's offset, or with
+ * `summed` each tile's sum, those before the group's then added up by the group: a
+ * launch fewer than scanning them first (4 us on the H100), for a few thousand loads a
+ * group. */
+inline uint cs_tile_offset(__global const uint* tile_offsets, const uint summed, __local uint* scratch)
 {
+  const uint g = get_group_id(0);
+  if (!summed) return tile_offsets[g];
   uint sum = 0;
-  for (uint i = get_local_id(0); i < count; i += CS_WG_SIZE) sum += values[i];
+  for (uint i = get_local_id(0); i < g; i += CS_WG_SIZE) sum += tile_offsets[i];
   uint total;
   cs_group_exclusive_scan(sum, scratch, &total);
   return total;
 }
 
-/* tile_offsets: each tile's offset, or with `summed` each tile's sum, those before the
- * group's added up by the group: a launch fewer than scanning them first (4 us on the
- * H100), for a few thousand loads a group. */
+/* The last group leaves the total in counters[total_slot]. */
+inline void cs_tiles_total(__global uint* counters, const uint total_slot, const uint end)
+{
+  if (total_slot != CS_NO_SLOT && get_local_id(0) == 0 && get_group_id(0) == get_num_groups(0) - 1)
+    counters[total_slot] = end;
+}
+
 CS_GROUP_KERNEL void cs_scan_tiles(__global const uint* in, const uint n, __global uint* out,
                                    __global const uint* tile_offsets, const uint summed,
                                    __global uint* counters, const uint total_slot)
 {
   __local uint tile[CS_PAD(CS_SCAN_TILE)];
   __local uint scratch[CS_WG_SIZE];
-  const uint g = get_group_id(0);
-  const uint offset = summed ? cs_group_sum(tile_offsets, g, scratch) : tile_offsets[g];
-  const uint end = cs_scan_tile(in, n, out, g * (size_t)CS_SCAN_TILE, offset, tile, scratch);
-  if (total_slot != CS_NO_SLOT && get_local_id(0) == 0 && g == get_num_groups(0) - 1)
-    counters[total_slot] = end;
+  const uint offset = cs_tile_offset(tile_offsets, summed, scratch);
+  cs_tiles_total(counters, total_slot,
+                 cs_scan_tile(in, n, out, get_group_id(0) * (size_t)CS_SCAN_TILE, offset, tile, scratch));
 }
 
 CS_GROUP_KERNEL void cs_compact_tiles(__global const uint* keep, const uint n, __global const uint* src,
@@ -141,14 +148,14 @@ CS_GROUP_KERNEL void cs_compact_tiles(__global const uint* keep, const uint n, _
 {
   __local uint tile[CS_PAD(CS_SCAN_TILE)];
   __local uint scratch[CS_WG_SIZE];
-  const uint g = get_group_id(0);
-  const uint offset = summed ? cs_group_sum(tile_offsets, g, scratch) : tile_offsets[g];
-  const uint end = cs_compact_tile(keep, n, g * (size_t)CS_SCAN_TILE, offset, src, words, dst, capacity, tile, scratch);
-  if (get_local_id(0) == 0 && g == get_num_groups(0) - 1) counters[total_slot] = end;
+  const uint offset = cs_tile_offset(tile_offsets, summed, scratch);
+  cs_tiles_total(counters, total_slot,
+                 cs_compact_tile(keep, n, get_group_id(0) * (size_t)CS_SCAN_TILE, offset, src, words, dst, capacity,
+                                 tile, scratch));
 }
 
 /* The whole scan by one group, tile after tile, where the input is a few tiles long: one
- * launch where the kernels above take three, each costing its launch and its tail (4-8
+ * launch where the kernels above take two, each costing its launch and its tail (4-8
  * us each on the H100). */
 CS_GROUP_KERNEL void cs_scan_in_one_group(__global const uint* in, const uint n, __global uint* out,
                                           __global uint* counters, const uint total_slot)
