@@ -32,23 +32,47 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
  * Work-item 0 also completes `offsets` with the total at [segments], so that they plan
  * the next run's segments. */
 #define CS_MERGE_SEGMENTS 64u
+
+/* The sum of counts[0, first) over the group, in every work-item. */
+inline uint cs_counts_before(__global const uint* counts, const uint first, __local uint* partial)
+{
+  const uint lid = (uint)get_local_id(0), size = (uint)get_local_size(0);
+  uint sum = 0;
+  for (uint s = lid; s < first; s += size) sum += counts[s];
+  partial[lid] = sum;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint stride = 1u; stride < size; stride *= 2u) {
+    if (lid % (2u * stride) == 0u && lid + stride < size) partial[lid] += partial[lid + stride];
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  const uint total = partial[0];
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return total;
+}
+
+/* With `own_offsets` (no item spilled, and few segments: the host decides) nothing has
+ * scanned the counts: each group adds up the counts before its segments and writes
+ * their offsets itself, a launch fewer. */
 __kernel void cs_merge_planned(__global const uint* items, const uint words, __global const uint* counts,
                                __global uint* offsets, const uint segments, __global const uint* plan,
                                const uint planned, const uint fresh, __global const uint* counters,
-                               const uint spill_slot, __global uint* dst, const uint capacity, const uint per_group)
+                               const uint spill_slot, __global uint* dst, const uint capacity, const uint per_group,
+                               const uint own_offsets)
 {
   __local uint start[CS_MERGE_SEGMENTS + 1u], from[CS_MERGE_SEGMENTS], to[CS_MERGE_SEGMENTS];
+  __local uint partial[CS_WG_SIZE];
   const uint g = (uint)get_group_id(0), lid = (uint)get_local_id(0), size = (uint)get_local_size(0);
-  if (g == 0u && lid == 0u) offsets[segments] = offsets[segments - 1u] + counts[segments - 1u];
+  if (!own_offsets && g == 0u && lid == 0u) offsets[segments] = offsets[segments - 1u] + counts[segments - 1u];
   const uint groups = (segments + per_group - 1u) / per_group;
   /* Every group reaches the barriers, the spill pool's too: under a branch that whole
    * groups took, pocl 3.1 lost items now and then (test_scheduler). */
   const uint first = g * per_group, k = g < groups ? min(per_group, segments - first) : 0u;
+  const uint before = own_offsets ? cs_counts_before(counts, min(first, segments), partial) : 0u;
   if (lid < k) {
     const uint s = first + lid, base = cs_segment_base(plan, planned, fresh, s);
     start[lid + 1u] = min(counts[s], cs_segment_base(plan, planned, fresh, s + 1u) - base);
     from[lid] = base;
-    to[lid] = offsets[s];
+    if (!own_offsets) to[lid] = offsets[s];
   }
   barrier(CLK_LOCAL_MEM_FENCE);
   uint end = 0;
@@ -57,6 +81,13 @@ __kernel void cs_merge_planned(__global const uint* items, const uint words, __g
   barrier(CLK_LOCAL_MEM_FENCE);
   if (lid < k) start[lid + 1u] = end;
   if (lid == 0u) start[0] = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (own_offsets && lid < k) {
+    const uint s = first + lid, at = before + start[lid];
+    to[lid] = at;
+    offsets[s] = at;
+    if (s == segments - 1u) offsets[segments] = at + counts[s];
+  }
   barrier(CLK_LOCAL_MEM_FENCE);
   if (g < groups) {
     uint s = 0;

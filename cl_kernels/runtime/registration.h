@@ -48,7 +48,7 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
 #define CS_EMITTER_PARAMS(T, P)                                                               \
   __global T* P##_out, __global uint* P##_counts, const uint P##_capacity,                    \
       __global uint* P##_counters, const uint P##_slot, __global const uint* P##_plan,        \
-      const uint P##_planned
+      const uint P##_planned, const uint P##_total_slot
 
 #if !defined(CS_REGISTRATION)
 /* Built outside a scheduler: any use of an emitter fails to compile with this name
@@ -71,7 +71,10 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
 /* P_plan holds the last run's P_planned + 1 segment offsets (the exclusive prefix sum of
  * its group counts, then their total); P_capacity is the room of a group it did not
  * have. P_counts holds each group's count, then (group, rank) of each spilled item. The
- * overflow slot counts spilled items, past the pool's size too. The group's segment
+ * overflow slot counts spilled items, past the pool's size too; the total slot, the
+ * stream's count, adds up the groups' counts, so that the host learns it with the
+ * stage's counters before anything has scanned the counts (the merge of an output
+ * packed after that read then finds its offsets itself, compact.cl). The group's segment
  * (start, room, spill pool's start) sits in local memory: read from the plan at each
  * emit, the compiler would load it early and hold it in registers through the kernel. */
 #define CS_EMITTER_BEGIN(P)                                                                   \
@@ -101,7 +104,10 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
   } while (0)
 #define CS_EMITTER_END(P)                                                                     \
   barrier(CLK_LOCAL_MEM_FENCE);                                                               \
-  if (get_local_id(0) == 0) P##_counts[get_group_id(0)] = P##_group_count
+  if (get_local_id(0) == 0) {                                                                 \
+    P##_counts[get_group_id(0)] = P##_group_count;                                            \
+    if (P##_group_count) atomic_add(&P##_counters[P##_total_slot], P##_group_count);          \
+  }
 
 #elif CS_REGISTRATION == CS_REG_LOCK_FREE
 #define CS_EMITTER_BEGIN(P) uint P##_count = 0
