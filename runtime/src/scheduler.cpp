@@ -868,7 +868,7 @@ struct Scheduler::State {
                            cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group),
                            cl_uint(own_offsets));
     const std::size_t groups = (e.segments + per_group - 1) / per_group;
-    const std::size_t spill_groups = (e.segments * spill_per_group + wg - 1) / wg;
+    const std::size_t spill_groups = own_offsets ? 0 : (e.segments * spill_per_group + wg - 1) / wg;
     context.launch(merge_planned, copy ? (groups + spill_groups) * wg : 1, wg, tl(), p.spec->name);
   }
 
