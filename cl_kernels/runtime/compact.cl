@@ -29,8 +29,8 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
  * than a group has work-items: one group a segment left most work-items idle while
  * tens of thousands of groups waited to be dispatched (the H200 took 37 us for a front
  * update's 19 MB of triangle pairs). A spilled item's group and rank follow the counts.
- * Work-item 0 also completes `offsets` with the total at [segments], so that they plan
- * the next run's segments. */
+ * Work-item 0 (with own_offsets, the last segment's group) also completes `offsets`
+ * with the total at [segments], so that they plan the next run's segments. */
 #define CS_MERGE_SEGMENTS 64u
 
 /* The sum of counts[0, first) over the group, in every work-item. */
