@@ -791,7 +791,7 @@ struct Scheduler::State {
       // Each emitter's segments fit alone; all of them together may not.
       if (p.mode != Registration::global_atomic) {
         try {
-            for (auto& e : p.emitters) prepare_segments(e, global);
+          for (auto& e : p.emitters) prepare_segments(e, global);
         } catch (const DeviceMemoryExhausted&) {
           fall_back_to_global_counter(p);
         }
@@ -1087,36 +1087,36 @@ struct Scheduler::State {
           return freed;
         };
         try {
-        const bool atomic = p->mode == Registration::global_atomic;
-        Redo r = std::find(unpacked.begin(), unpacked.end(), p) != unpacked.end() ? Redo::full : Redo::none;
-        for (auto& e : p->emitters) {
-          auto& dst = state(e.stream);
-          if (segments_overflowed(*p, e)) {
-            // The rerun plans from this execution's counts, so every group fits.
-            if (packs_late(*p, e)) merge_segments(*p, e, false);
-            if (p->mode == Registration::segmented_lock) adopt_plan(e);
-            else e.segment_capacity = grown(host_counters[e.overflow_slot]);
-            r = Redo::full;
+          const bool atomic = p->mode == Registration::global_atomic;
+          Redo r = std::find(unpacked.begin(), unpacked.end(), p) != unpacked.end() ? Redo::full : Redo::none;
+          for (auto& e : p->emitters) {
+            auto& dst = state(e.stream);
+            if (segments_overflowed(*p, e)) {
+              // The rerun plans from this execution's counts, so every group fits.
+              if (packs_late(*p, e)) merge_segments(*p, e, false);
+              if (p->mode == Registration::segmented_lock) adopt_plan(e);
+              else e.segment_capacity = grown(host_counters[e.overflow_slot]);
+              r = Redo::full;
+            }
+            if (outgrew(*p, e)) {
+              const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot], later_segments_back);
+              r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
+            }
           }
-          if (outgrew(*p, e)) {
-            const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot], later_segments_back);
-            r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
+          if (p->spec->culls()) {
+            auto& dst = state(p->spec->cull_target);
+            if (host_counters[dst.slot] > dst.capacity) {
+              allocate_making_room([&] { with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); }); },
+                                   later_segments_back);
+              r = std::max(r, Redo::pack);
+            }
           }
-        }
-        if (p->spec->culls()) {
-          auto& dst = state(p->spec->cull_target);
-          if (host_counters[dst.slot] > dst.capacity) {
-            allocate_making_room([&] { with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); }); },
-                                 later_segments_back);
-            r = std::max(r, Redo::pack);
-          }
-        }
-        if (r == Redo::full) clear_counters(*p);
-        execute(*p, r);
-        ++p->stats.reruns;
-        if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
-                                            [&](const EmitterState& e) { return packs_late(*p, e); }))
-          busy.erase(std::find(busy.begin(), busy.end(), p));
+          if (r == Redo::full) clear_counters(*p);
+          execute(*p, r);
+          ++p->stats.reruns;
+          if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
+                                              [&](const EmitterState& e) { return packs_late(*p, e); }))
+            busy.erase(std::find(busy.begin(), busy.end(), p));
         } catch (const DeviceMemoryExhausted&) {
           out_of_memory(p);
           throw;
