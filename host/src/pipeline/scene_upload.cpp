@@ -54,6 +54,10 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
   q.write(s.faces, 0, t.faces.data(), t.faces.size());
   q.write(s.edges, 0, t.edges.data(), t.edges.size());
   q.write(s.nodes, 0, layout.nodes.data(), layout.nodes.size());
+  std::vector<std::uint32_t> face_leaves(t.faces.size());
+  for (std::size_t n = 0; n < layout.nodes.size(); ++n)
+    if (const std::int32_t face = layout.nodes[n][1]; face >= 0) face_leaves[std::size_t(face)] = std::uint32_t(n);
+  q.write(s.face_leaves, 0, face_leaves.data(), face_leaves.size());
   if (has(s.refit_ranges)) q.write(s.refit_ranges, 0, g.refit_ranges.data(), g.refit_ranges.size());
   for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
     const ObjectDescription& object = scene.objects[o];
@@ -68,7 +72,6 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
     // Static bounds never change: the host's float twin computes them once.
     const FloatBounds b = float_bounds(build_topology(object.faces, x.size()), layout.trees[o], x, x,
                                        float_above(min_separation));
-    q.write(s.face_boxes, sl.first_face, b.faces.data(), b.faces.size());
     q.write(s.edge_boxes, sl.first_edge, b.edges.data(), b.edges.size());
     q.write(s.vertex_boxes, sl.first_vertex, b.vertices.data(), b.vertices.size());
     q.write(s.node_boxes, sl.first_node, b.nodes.data(), b.nodes.size());

@@ -87,7 +87,8 @@ struct CcdStreams {
   // pass reads them, and they hold nothing until the first such upload.
   runtime::StreamId x_next, x_next_double;
   runtime::StreamId faces, edges, nodes, face_edges, owned, vertex_object;
-  runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes, refit_ranges;
+  runtime::StreamId face_leaves;  // the BVH leaf of each face, whose box is the face's
+  runtime::StreamId edge_boxes, vertex_boxes, node_boxes, refit_ranges;
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
