@@ -251,25 +251,22 @@ __kernel void cs_decompose(__global const uint2* pairs, const uint n, __global c
   CS_EMITTER_END(ee);
 }
 
-/* One work-item per orphan pair, the vertex-face pairs then the edge-edge ones, in one
- * launch: the pairs whose boxes overlap go on. A face's box is its BVH leaf's. (Flagged
- * and compacted a kind at a time, they took two launches more on every step.) */
-__kernel void cs_cull_orphans(__global const uint2* vf, const uint nvf, __global const uint2* ee, const uint nee,
-                              __global const float* vertex_boxes, __global const float* edge_boxes,
-                              __global const uint* face_leaves, __global const float* node_boxes,
-                              CS_EMITTER_PARAMS(uint2, kept_vf), CS_EMITTER_PARAMS(uint2, kept_ee))
+/* Flags orphan edge-edge pairs whose boxes overlap. */
+__kernel void cs_cull_edge_pairs(__global const uint2* pairs, const uint n, __global const float* edge_boxes,
+                                 __global uint* keep)
 {
-  CS_EMITTER_BEGIN(kept_vf);
-  CS_EMITTER_BEGIN(kept_ee);
   const uint i = get_global_id(0);
-  if (i < nvf) {
-    const uint2 p = vf[i];
-    if (cs_dop_overlap(vertex_boxes + CS_DOP_FLOATS * p.x, node_boxes + CS_DOP_FLOATS * face_leaves[p.y]))
-      CS_EMIT(kept_vf, p);
-  } else if (i - nvf < nee) {
-    const uint2 p = ee[i - nvf];
-    if (cs_dop_overlap(edge_boxes + CS_DOP_FLOATS * p.x, edge_boxes + CS_DOP_FLOATS * p.y)) CS_EMIT(kept_ee, p);
-  }
-  CS_EMITTER_END(kept_vf);
-  CS_EMITTER_END(kept_ee);
+  if (i >= n) return;
+  keep[i] = cs_dop_overlap(edge_boxes + CS_DOP_FLOATS * pairs[i].x, edge_boxes + CS_DOP_FLOATS * pairs[i].y);
+}
+
+/* Flags orphan vertex-face pairs whose boxes overlap; a face's box is its BVH leaf's. */
+__kernel void cs_cull_vertex_face_pairs(__global const uint2* pairs, const uint n,
+                                        __global const float* vertex_boxes, __global const uint* face_leaves,
+                                        __global const float* node_boxes, __global uint* keep)
+{
+  const uint i = get_global_id(0);
+  if (i >= n) return;
+  keep[i] = cs_dop_overlap(vertex_boxes + CS_DOP_FLOATS * pairs[i].x,
+                           node_boxes + CS_DOP_FLOATS * face_leaves[pairs[i].y]);
 }

@@ -178,7 +178,8 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     CHECK(contains(passes, "swept bounds"));
     CHECK(refitted_levels(g) == levels_up_from(make_layout(scene, 0).depth));
     CHECK(contains(passes, "front update"));
-    CHECK(contains(passes, "cull orphans"));
+    CHECK(contains(passes, "cull orphan vf"));
+    CHECK(contains(passes, "cull orphan ee"));
     const auto screen = std::find_if(g.passes().begin(), g.passes().end(),
                                      [](const auto& p) { return p.name == "test candidates"; });
     REQUIRE(screen != g.passes().end());
@@ -200,7 +201,7 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     g = graph_of(scene);
     const auto passes = names(g.passes()), streams = names(g.streams());
     CHECK(contains(passes, "front update"));
-    CHECK(!contains(passes, "cull orphans"));
+    CHECK(!contains(passes, "cull orphan vf"));
     CHECK(!contains(streams, "orphan vf candidates"));
   }
   SECTION("static objects get no refit; static-static and masked pairs never enter the front")

@@ -476,28 +476,24 @@ struct GraphBuilder {
     g.within_run(s.triangle_pairs);  // only the decomposition reads them
     s.vf = g.variable("vf candidates", 8, guess);
     s.ee = g.variable("ee candidates", 8, guess);
-    // The orphan pairs' cull needs no front: it goes first, before the front update and
-    // what it emits take the device's memory. Its pairs keep about a third of the
-    // orphans (cloth-ball 248K of 947K, n-body 870K of 1.55M).
-    const std::size_t orphan_vf = l.orphans.vf.size(), orphan_ee = l.orphans.ee.size();
-    if (orphan_vf + orphan_ee > 0) {
-      s.orphan_vf = g.fixed("orphan vf", 8, orphan_vf);
-      s.orphan_ee = g.fixed("orphan ee", 8, orphan_ee);
-      s.kept_vf = g.variable("orphan vf candidates", 8, sized(std::max<std::size_t>(256, orphan_vf / 4)));
-      s.kept_ee = g.variable("orphan ee candidates", 8, sized(std::max<std::size_t>(256, orphan_ee / 4)));
-      g.pass("cull orphans", {program, "cs_cull_orphans", front_option})
-          .launch_over({s.orphan_vf, s.orphan_ee})
-          .emit(s.kept_vf, 0.4)
-          .emit(s.kept_ee, 0.4)
-          .arg(buffer_of(s.orphan_vf))
-          .arg(count_of(s.orphan_vf))
-          .arg(buffer_of(s.orphan_ee))
-          .arg(count_of(s.orphan_ee))
-          .arg(buffer_of(s.vertex_boxes))
-          .arg(buffer_of(s.edge_boxes))
-          .arg(buffer_of(s.face_leaves))
-          .arg(buffer_of(s.node_boxes));
-    }
+    // The orphan pairs' culls need no front: they go first, before the front update and
+    // what it emits take the device's memory.
+    auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, const char* kernel,
+                            std::vector<StreamId> boxes, StreamId& pairs, StreamId& kept) {
+      if (count == 0) return;
+      pairs = g.fixed(name, 8, count);
+      kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
+      auto& cull = g.pass(std::string("cull ") + name, {program, kernel, front_option})
+                       .launch_over(pairs)
+                       .cull(pairs, kept)
+                       .arg(buffer_of(pairs))
+                       .arg(count_of(pairs));
+      for (StreamId b : boxes) cull.arg(buffer_of(b));
+    };
+    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), "cs_cull_vertex_face_pairs",
+                 {s.vertex_boxes, s.face_leaves, s.node_boxes}, s.orphan_vf, s.kept_vf);
+    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs", {s.edge_boxes},
+                 s.orphan_ee, s.kept_ee);
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
                        .launch_over(s.front)
                        .read(s.node_boxes)

@@ -80,8 +80,8 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
   q.write(s.face_edges, 0, t.face_edges.data(), t.face_edges.size());
   const std::vector<std::uint32_t> owned(t.owned.begin(), t.owned.end());
   q.write(s.owned, 0, owned.data(), owned.size());
-  if (!layout.orphans.vf.empty()) q.write(s.orphan_vf, 0, layout.orphans.vf.data(), layout.orphans.vf.size());
-  if (!layout.orphans.ee.empty()) q.write(s.orphan_ee, 0, layout.orphans.ee.data(), layout.orphans.ee.size());
+  if (has(s.orphan_vf)) q.write(s.orphan_vf, 0, layout.orphans.vf.data(), layout.orphans.vf.size());
+  if (has(s.orphan_ee)) q.write(s.orphan_ee, 0, layout.orphans.ee.data(), layout.orphans.ee.size());
   q.write(s.vertex_object, 0, layout.vertex_object.data(), layout.vertex_object.size());
   return exact;
 }
