@@ -25,12 +25,12 @@ inline void cs_swept_dop(__global const float* x0, __global const float* x1, con
  * vertices, in one launch rather than one a kind. The group's boxes are staged in local
  * memory and written word by word across the group, neighbouring work-items to
  * neighbouring words: a box a work-item put 72 bytes between the words of one store.
- * A face's box is its BVH leaf's (face_leaves: the leaf of each face), which the refit
- * then leaves as it is: kept apart as well, the faces' boxes held n-body's 10 MiB twice. */
+ * A face's box is its BVH leaf's (cs_face_leaf of its word), which the refit then
+ * leaves as it is: kept apart as well, the faces' boxes held n-body's 10 MiB twice. */
 CS_GROUP_KERNEL void cs_primitive_bounds(__global const float* x0, __global const float* x1,
                                          __global const uint* faces, __global const uint* edges, const uint nf,
                                          const uint ne, const uint nv, const float separation,
-                                         __global const uint* face_leaves, __global float* node_boxes,
+                                         __global const uint* face_words, __global float* node_boxes,
                                          __global float* edge_boxes, __global float* vertex_boxes)
 {
   __local float staged[CS_WG_SIZE * CS_DOP_FLOATS];
@@ -53,7 +53,7 @@ CS_GROUP_KERNEL void cs_primitive_bounds(__global const float* x0, __global cons
   const uint words = min((uint)CS_WG_SIZE, total - first) * CS_DOP_FLOATS;
   for (uint w = lid; w < words; w += CS_WG_SIZE) {
     const uint j = first + w / CS_DOP_FLOATS, k = w % CS_DOP_FLOATS;
-    __global float* box = j < nf ? node_boxes + (size_t)CS_DOP_FLOATS * face_leaves[j]
+    __global float* box = j < nf ? node_boxes + (size_t)CS_DOP_FLOATS * cs_face_leaf(face_words[j])
                           : j < nfe ? edge_boxes + (size_t)CS_DOP_FLOATS * (j - nf)
                                     : vertex_boxes + (size_t)CS_DOP_FLOATS * (j - nfe);
     box[k] = staged[w];

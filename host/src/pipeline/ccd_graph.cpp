@@ -71,6 +71,11 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
                        " levels, more than the traversal's stack allows (" + std::to_string(max_tree_depth) + ")");
     l.depth = std::max(l.depth, l.trees[o].depth());
   }
+  std::size_t nodes = 0;
+  for (const Bvh& t : l.trees) nodes += t.nodes.size();
+  if (nodes >= max_scene_nodes)
+    throw InputError("the scene's BVHs have " + std::to_string(nodes) + " nodes, more than the " +
+                     std::to_string(max_scene_nodes - 1) + " a face's word on the device can name");
 
   // Slots: moving objects, then static ones.
   for (int pass = 0; pass < 2; ++pass)
@@ -404,7 +409,7 @@ struct GraphBuilder {
     s.faces = g.fixed("faces", 12, nf);
     s.edges = g.fixed("edges", 8, ne);
     s.nodes = g.fixed("bvh nodes", 16, nn);
-    s.face_leaves = g.fixed("face leaves", 4, nf);
+    s.face_words = g.fixed("face leaves and ownership", 4, nf);
     s.edge_boxes = g.fixed("edge bounds", 72, ne);
     s.vertex_boxes = g.fixed("vertex bounds", 72, nv);
     s.node_boxes = g.fixed("bvh bounds", 72, nn);
@@ -430,7 +435,7 @@ struct GraphBuilder {
         .arg(value_of(cl_uint(l.moving_edges)))
         .arg(value_of(cl_uint(l.moving_vertices)))
         .arg(value_of(separation))
-        .arg(buffer_of(s.face_leaves))
+        .arg(buffer_of(s.face_words))
         .arg(buffer_of(s.node_boxes))
         .arg(buffer_of(s.edge_boxes))
         .arg(buffer_of(s.vertex_boxes));
@@ -462,7 +467,6 @@ struct GraphBuilder {
     const std::string front_option = "-DCS_KEEP_FRONT=" + std::to_string(int(keep_front));
     const std::size_t guess = sized(std::max<std::size_t>(1024, nf));
     s.face_edges = g.fixed("face edges", 12, nf);
-    s.owned = g.fixed("ownership", 4, nf);
     if (keep_front) {
       s.front = g.variable("front", 8, sized(std::max(front_size, 4 * nf)));
       s.next_front = g.variable("next front", 8, sized(std::max(front_size, 4 * nf)));
@@ -491,7 +495,7 @@ struct GraphBuilder {
       for (StreamId b : boxes) cull.arg(buffer_of(b));
     };
     cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), "cs_cull_vertex_face_pairs",
-                 {s.vertex_boxes, s.face_leaves, s.node_boxes}, s.orphan_vf, s.kept_vf);
+                 {s.vertex_boxes, s.face_words, s.node_boxes}, s.orphan_vf, s.kept_vf);
     cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs", {s.edge_boxes},
                  s.orphan_ee, s.kept_ee);
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
@@ -525,10 +529,9 @@ struct GraphBuilder {
         .arg(count_of(s.triangle_pairs))
         .arg(buffer_of(s.faces))
         .arg(buffer_of(s.face_edges))
-        .arg(buffer_of(s.owned))
+        .arg(buffer_of(s.face_words))
         .arg(buffer_of(s.vertex_boxes))
         .arg(buffer_of(s.edge_boxes))
-        .arg(buffer_of(s.face_leaves))
         .arg(buffer_of(s.node_boxes));
   }
 
