@@ -33,15 +33,12 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
  * with the total at [segments], so that they plan the next run's segments. */
 #define CS_MERGE_SEGMENTS 64u
 
-/* The sum of counts[0, first) over the group, in every work-item: the sums of the
- * whole tiles before `first` (registration.h), then the counts of its own tile. */
-inline uint cs_counts_before(__global const uint* counts, __global const uint* tile_sums, const uint first,
-                             __local uint* partial)
+/* The sum of counts[0, first) over the group, in every work-item. */
+inline uint cs_counts_before(__global const uint* counts, const uint first, __local uint* partial)
 {
-  const uint lid = (uint)get_local_id(0), size = (uint)get_local_size(0), tile = first / CS_TILE_GROUPS;
+  const uint lid = (uint)get_local_id(0), size = (uint)get_local_size(0);
   uint sum = 0;
-  for (uint t = lid; t < tile; t += size) sum += tile_sums[t];
-  for (uint s = tile * CS_TILE_GROUPS + lid; s < first; s += size) sum += counts[s];
+  for (uint s = lid; s < first; s += size) sum += counts[s];
   partial[lid] = sum;
   barrier(CLK_LOCAL_MEM_FENCE);
   for (uint stride = 1u; stride < size; stride *= 2u) {
@@ -53,15 +50,14 @@ inline uint cs_counts_before(__global const uint* counts, __global const uint* t
   return total;
 }
 
-/* With `own_offsets` (no item spilled, and the emitting kernel summed its tiles at
- * counters[tile_slot]: the host decides) nothing has scanned the counts: each group adds
- * up the counts before its segments and writes their offsets itself, a scan's launches
- * fewer. */
+/* With `own_offsets` (no item spilled, and few segments: the host decides) nothing has
+ * scanned the counts: each group adds up the counts before its segments and writes
+ * their offsets itself, a launch fewer. */
 __kernel void cs_merge_planned(__global const uint* items, const uint words, __global const uint* counts,
                                __global uint* offsets, const uint segments, __global const uint* plan,
                                const uint planned, const uint fresh, __global const uint* counters,
-                               const uint spill_slot, const uint tile_slot, __global uint* dst, const uint capacity,
-                               const uint per_group, const uint own_offsets)
+                               const uint spill_slot, __global uint* dst, const uint capacity, const uint per_group,
+                               const uint own_offsets)
 {
   __local uint start[CS_MERGE_SEGMENTS + 1u], from[CS_MERGE_SEGMENTS], to[CS_MERGE_SEGMENTS];
   __local uint partial[CS_WG_SIZE];
@@ -71,7 +67,7 @@ __kernel void cs_merge_planned(__global const uint* items, const uint words, __g
   /* Every group reaches the barriers, the spill pool's too: under a branch that whole
    * groups took, pocl 3.1 lost items now and then (test_scheduler). */
   const uint first = g * per_group, k = g < groups ? min(per_group, segments - first) : 0u;
-  const uint before = own_offsets ? cs_counts_before(counts, counters + tile_slot, min(first, segments), partial) : 0u;
+  const uint before = own_offsets ? cs_counts_before(counts, min(first, segments), partial) : 0u;
   if (lid < k) {
     const uint s = first + lid, base = cs_segment_base(plan, planned, fresh, s);
     start[lid + 1u] = min(counts[s], cs_segment_base(plan, planned, fresh, s + 1u) - base);

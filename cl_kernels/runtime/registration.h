@@ -39,10 +39,6 @@
  * pool follows the last group's segment. The scheduler sizes the buffer by the same
  * rules (segment_items in scheduler.cpp). */
 #define CS_SPILL_PER_GROUP 16u
-
-/* Segmented lock: groups whose counts add up into one tile sum (P_tile_slot), from which
- * the merge of an output packed late finds its segments' offsets without a scan. */
-#define CS_TILE_GROUPS 256u
 inline uint cs_segment_base(__global const uint* plan, const uint planned, const uint fresh, const uint g)
 {
   const uint k = min(g, planned), o = plan[k];
@@ -52,7 +48,7 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
 #define CS_EMITTER_PARAMS(T, P)                                                               \
   __global T* P##_out, __global uint* P##_counts, const uint P##_capacity,                    \
       __global uint* P##_counters, const uint P##_slot, __global const uint* P##_plan,        \
-      const uint P##_planned, const uint P##_total_slot, const uint P##_tile_slot
+      const uint P##_planned, const uint P##_total_slot
 
 #if !defined(CS_REGISTRATION)
 /* Built outside a scheduler: any use of an emitter fails to compile with this name
@@ -80,9 +76,7 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
  * stage's counters before anything has scanned the counts (the merge of an output
  * packed after that read then finds its offsets itself, compact.cl). The group's segment
  * (start, room, spill pool's start) sits in local memory: read from the plan at each
- * emit, the compiler would load it early and hold it in registers through the kernel.
- * Where P_tile_slot is not 0, each group also adds its count to the sum of its tile of
- * CS_TILE_GROUPS groups, at counters[P_tile_slot + tile]. */
+ * emit, the compiler would load it early and hold it in registers through the kernel. */
 #define CS_EMITTER_BEGIN(P)                                                                   \
   __local uint P##_group_count, P##_segment[3];                                               \
   if (get_local_id(0) == 0) {                                                                 \
@@ -112,11 +106,7 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
   barrier(CLK_LOCAL_MEM_FENCE);                                                               \
   if (get_local_id(0) == 0) {                                                                 \
     P##_counts[get_group_id(0)] = P##_group_count;                                            \
-    if (P##_group_count) {                                                                    \
-      atomic_add(&P##_counters[P##_total_slot], P##_group_count);                             \
-      if (P##_tile_slot)                                                                      \
-        atomic_add(&P##_counters[P##_tile_slot + (uint)get_group_id(0) / CS_TILE_GROUPS], P##_group_count); \
-    }                                                                                         \
+    if (P##_group_count) atomic_add(&P##_counters[P##_total_slot], P##_group_count);          \
   }
 
 #elif CS_REGISTRATION == CS_REG_LOCK_FREE

@@ -55,7 +55,6 @@ struct EmitterState {
   std::size_t segments = 0;
   std::size_t segment_capacity = 0;  // lock-free: items a work-item's segment holds
   std::uint32_t overflow_slot = no_slot;
-  std::uint32_t tile_slot = 0;  // segmented lock: its tile sums' first counter (tile_words of them)
   // Segmented lock: this execution's segment offsets (the prefix sum of its counts,
   // then their total), and the last execution's, which plan this one's segments.
   Buffer offsets, plan;
@@ -70,14 +69,9 @@ struct EmitterState {
 // Segmented lock: the spill pool's items per group (CS_SPILL_PER_GROUP in
 // cl_kernels/runtime/registration.h).
 constexpr std::uint64_t spill_per_group = 16;
-// Segmented lock: the counters after the host's slots hold, for every emitter, the sums
-// of the counts of CS_TILE_GROUPS (registration.h) groups each, zeroed with the slots at
-// the start of a run. Up to tile_words of them, the merge of an output packed late adds
-// up the counts before each group's segments itself (a few loads a work-item) rather
-// than after a scan's launches: 65,536 segments, 16.8M items at 256 work-items a group.
-constexpr std::size_t tile_groups = 256;
-constexpr std::uint32_t tile_words = 256;
-constexpr std::size_t own_offsets_most_segments = tile_groups * tile_words;
+// Segments of an output packed late up to which its merge adds up the counts before each
+// group's segments itself (a few loads a work-item) rather than after a scan's launch.
+constexpr std::size_t own_offsets_most_segments = 8192;
 
 // Segmented lock: the most segments one group of the merge copies (CS_MERGE_SEGMENTS
 // in cl_kernels/runtime/compact.cl).
@@ -156,8 +150,7 @@ struct Scheduler::State {
   Buffer offsets;  // lock-free segments' offsets
   Buffer no_plan;  // one zero: the plan of segments that have none
   Buffer counters;
-  std::vector<std::uint32_t> host_counters;  // the slots; the tile sums follow them on the device
-  std::size_t counter_words = 0;
+  std::vector<std::uint32_t> host_counters;
   std::vector<StreamState> streams;
   std::vector<PassState> passes;  // execution order
   std::vector<std::vector<unsigned char>> params;
@@ -548,7 +541,6 @@ struct Scheduler::State {
         k.set_arg(index++, cl_uint(0));
       }
       k.set_arg(index++, cl_uint(dst.slot));
-      k.set_arg(index++, cl_uint(sums_tiles(p, e) ? e.tile_slot : 0));
     }
     if (p.spec->culls()) k.set_arg(index++, p.keep);
   }
@@ -840,9 +832,9 @@ struct Scheduler::State {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
         // An output packed once the counters are read needs no scan before: its kernel
-        // added up its count and its tiles' (registration.h), and where none spilled, its
-        // merge finds their offsets itself.
-        e.scanned = !sums_tiles(p, e);
+        // added up its count (registration.h), and where few segments hold it and none
+        // spilled, its merge finds their offsets itself.
+        e.scanned = !packs_late(p, e) || e.segments > own_offsets_most_segments;
         with_memory([&] {
           ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets");
           if (e.scanned) scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
@@ -873,8 +865,8 @@ struct Scheduler::State {
     e.scanned = true;
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
                            cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
-                           cl_uint(e.overflow_slot), cl_uint(e.tile_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0),
-                           cl_uint(per_group), cl_uint(own_offsets));
+                           cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group),
+                           cl_uint(own_offsets));
     const std::size_t groups = (e.segments + per_group - 1) / per_group;
     const std::size_t spill_groups = own_offsets ? 0 : (e.segments * spill_per_group + wg - 1) / wg;
     context.launch(merge_planned, copy ? (groups + spill_groups) * wg : 1, wg, tl(), p.spec->name);
@@ -906,13 +898,6 @@ struct Scheduler::State {
   bool packs_late(const PassState& p, const EmitterState& e) const
   {
     return hands_over(p, e) || (p.mode == Registration::segmented_lock && late && state(e.stream).transient);
-  }
-
-  // Whether the emitter's kernel sums its tiles, from which the merge of an output packed
-  // late finds its offsets without a scan (if nothing spilled).
-  bool sums_tiles(const PassState& p, const EmitterState& e) const
-  {
-    return packs_late(p, e) && e.segments <= own_offsets_most_segments;
   }
 
   // After the stage's counters are read and no pass of it runs again: the outputs that
@@ -1165,7 +1150,6 @@ struct Scheduler::State {
     for (const auto& e : p.emitters) {
       context.fill_u32(counters, std::uint32_t(state(e.stream).base), state(e.stream).slot, 1, tl());
       context.fill_u32(counters, 0, e.overflow_slot, 1, tl());
-      if (e.tile_slot) context.fill_u32(counters, 0, e.tile_slot, tile_words, tl());
     }
   }
 
@@ -1207,7 +1191,7 @@ struct Scheduler::State {
     for (const auto& p : passes)
       for (StreamId s : pass_outputs(*p.spec))
         if (spec(s).variable) state(s).known = false;
-    context.fill_u32(counters, 0, 0, counter_words, tl());
+    context.fill_u32(counters, 0, 0, host_counters.size(), tl());
 
     // However the run ends (a stop, an error), no pass's scratch is busy afterwards:
     // allocations between runs may take it.
@@ -1483,7 +1467,7 @@ struct Scheduler::State {
           whole.once.emplace_back(&state(s), state(s).count);
           state(s).count = 0;
         }
-      context.fill_u32(counters, 0, 0, counter_words, tl());
+      context.fill_u32(counters, 0, 0, host_counters.size(), tl());
       for (std::size_t j = first; j < passes.size(); ++j) {
         if (k > 0 && !every_slice[j]) continue;
         if (passes[j].list) passes[j].list->settled = false;
@@ -1612,15 +1596,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
   }
   s.context.fill_u32(s.no_plan, 0, 0, 1);
   s.host_counters.assign(std::max<std::uint32_t>(slots, 1), 0);
-  std::uint32_t words = std::uint32_t(s.host_counters.size());
-  if (options.registration == Registration::segmented_lock)
-    for (auto& p : s.passes)
-      for (auto& e : p.emitters) {
-        e.tile_slot = words;
-        words += tile_words;
-      }
-  s.counter_words = words;
-  s.counters = Buffer(context, s.counter_words * sizeof(std::uint32_t), "stream counters");
+  s.counters = Buffer(context, s.host_counters.size() * sizeof(std::uint32_t), "stream counters");
 }
 
 Scheduler::~Scheduler() = default;
