@@ -4,6 +4,7 @@
  * grows and reruns. */
 #include "common.h"
 #include "copy.h"
+#include "group_sum.h"
 #include "registration.h"
 
 /* Lock-free per-thread segments: segment s holds counts[s] items, its item j at
@@ -33,23 +34,6 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
  * with the total at [segments], so that they plan the next run's segments. */
 #define CS_MERGE_SEGMENTS 64u
 
-/* The sum of counts[0, first) over the group, in every work-item. */
-inline uint cs_counts_before(__global const uint* counts, const uint first, __local uint* partial)
-{
-  const uint lid = (uint)get_local_id(0), size = (uint)get_local_size(0);
-  uint sum = 0;
-  for (uint s = lid; s < first; s += size) sum += counts[s];
-  partial[lid] = sum;
-  barrier(CLK_LOCAL_MEM_FENCE);
-  for (uint stride = 1u; stride < size; stride *= 2u) {
-    if (lid % (2u * stride) == 0u && lid + stride < size) partial[lid] += partial[lid + stride];
-    barrier(CLK_LOCAL_MEM_FENCE);
-  }
-  const uint total = partial[0];
-  barrier(CLK_LOCAL_MEM_FENCE);
-  return total;
-}
-
 /* With `own_offsets` (no item spilled, and few segments: the host decides) nothing has
  * scanned the counts: each group adds up the counts before its segments and writes
  * their offsets itself, a launch fewer. */
@@ -67,7 +51,7 @@ __kernel void cs_merge_planned(__global const uint* items, const uint words, __g
   /* Every group reaches the barriers, the spill pool's too: under a branch that whole
    * groups took, pocl 3.1 lost items now and then (test_scheduler). */
   const uint first = g * per_group, k = g < groups ? min(per_group, segments - first) : 0u;
-  const uint before = own_offsets ? cs_counts_before(counts, min(first, segments), partial) : 0u;
+  const uint before = own_offsets ? cs_group_sum_before(counts, min(first, segments), partial) : 0u;
   if (lid < k) {
     const uint s = first + lid, base = cs_segment_base(plan, planned, fresh, s);
     start[lid + 1u] = min(counts[s], cs_segment_base(plan, planned, fresh, s + 1u) - base);

@@ -9,6 +9,7 @@
  * they run in lockstep, so the same code is right on pocl, NVIDIA and AMD. */
 #include "common.h"
 #include "copy.h"
+#include "group_sum.h"
 
 #ifndef CS_SCAN_ITEMS
 #error "CS_SCAN_ITEMS (items per work-item) is chosen by the host's Scan for the device"
@@ -115,12 +116,7 @@ inline uint cs_compact_tile(__global const uint* keep, const uint n, const size_
 inline uint cs_tile_offset(__global const uint* tile_offsets, const uint summed, __local uint* scratch)
 {
   const uint g = get_group_id(0);
-  if (!summed) return tile_offsets[g];
-  uint sum = 0;
-  for (uint i = get_local_id(0); i < g; i += CS_WG_SIZE) sum += tile_offsets[i];
-  uint total;
-  cs_group_exclusive_scan(sum, scratch, &total);
-  return total;
+  return summed ? cs_group_sum_before(tile_offsets, g, scratch) : tile_offsets[g];
 }
 
 /* The last group leaves the total in counters[total_slot]. */
