@@ -58,7 +58,6 @@ struct EmitterState {
   // Segmented lock: this execution's segment offsets (the prefix sum of its counts,
   // then their total), and the last execution's, which plan this one's segments.
   Buffer offsets, plan;
-  bool scanned = true;            // `offsets` hold this execution's scan (merge_segments)
   std::size_t planned = 0;        // segments the plan covers; 0: none yet
   std::size_t planned_total = 0;  // items they emitted
   // Segmented lock, where no plan fits: what a group may hold at most, from a forgotten
@@ -831,13 +830,10 @@ struct Scheduler::State {
     } else if (p.mode == Registration::segmented_lock && global > 0) {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
-        // An output packed once the counters are read needs no scan before: its kernel
-        // added up its count (registration.h), and where few segments hold it and none
-        // spilled, its merge finds their offsets itself.
-        e.scanned = !packs_late(p, e) || e.segments > own_offsets_most_segments;
         with_memory([&] {
           ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets");
-          if (e.scanned) scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
+          if (scans_at_once(p, e))
+            scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
         });
         if (!packs_late(p, e)) merge_segments(p, e);
       }
@@ -854,15 +850,14 @@ struct Scheduler::State {
   // Segmented lock: the segments' items, in the order of their groups, into the stream.
   // The merge also completes the offsets with their total, which makes them a plan;
   // with `copy` false it does only that.
-  void merge_segments(const PassState& p, EmitterState& e, bool copy = true)
+  void merge_segments(const PassState& p, const EmitterState& e, bool copy = true)
   {
     const auto& dst = state(e.stream);
     const std::size_t wg = context.work_group_size(), per_group = merged_per_group(e);
     // A spilled item finds its place through the scanned offset of its group's segment.
-    const bool own_offsets = !e.scanned && copy && host_counters[e.overflow_slot] == 0;
-    if (!e.scanned && !own_offsets)
+    const bool scanned = scans_at_once(p, e), own_offsets = !scanned && copy && host_counters[e.overflow_slot] == 0;
+    if (!scanned && !own_offsets)
       scan.exclusive(e.counts, e.offsets, e.segments, counters, no_slot, tl(), p.spec->name.c_str());
-    e.scanned = true;
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
                            cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
                            cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group),
@@ -888,6 +883,15 @@ struct Scheduler::State {
   static bool hands_over(const PassState& p, const EmitterState& e)
   {
     return p.mode == Registration::segmented_lock && e.handed_from != StreamId{};
+  }
+
+  // Whether the emitter's counts are scanned into its offsets right after its kernel. An
+  // output packed once the counters are read needs no scan before: its kernel added up
+  // its count (registration.h), and where few segments hold it and none spilled, its
+  // merge finds their offsets itself (merge_segments).
+  bool scans_at_once(const PassState& p, const EmitterState& e) const
+  {
+    return !packs_late(p, e) || e.segments > own_offsets_most_segments;
   }
 
   // Whether the emitter's segments are packed only once the stage's counters are read:
