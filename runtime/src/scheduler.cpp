@@ -906,12 +906,20 @@ struct Scheduler::State {
 
   // After the stage's counters are read and no pass of it runs again: the outputs that
   // pack late, in order, each taking a buffer of its items, then in the arena giving its
-  // segments' place to the next.
+  // segments' place to the next. Once memory has run short, an output to be handed over
+  // that the pass wrote into a buffer of its own (through the global counter) leaves its
+  // input spent as a hand-over would: held beside it for the rest of the run, the front
+  // left the refinement no room under budgets above those that ran (NVIDIA, a generated
+  // n-body scene whose step peaks at 10.4 MiB: 8.0 and 8.2 MiB failed, 7.5 ran). Not
+  // where the pass runs in slices, whose later slices read the input.
   void pack_late(PassState& p)
   {
     bool first = true;
     for (auto& e : p.emitters) {
-      if (!packs_late(p, e)) continue;
+      if (!packs_late(p, e)) {
+        if (pressed && e.handed_from != StreamId{} && std::size_t(&p - passes.data()) < sliced_pass) leave_spent(p, e);
+        continue;
+      }
       if (!first && use_arena) give_back_spent_inputs(p, host_counters[state(e.stream).slot] * spec(e.stream).element_bytes);
       first = false;
       if (hands_over(p, e)) {
@@ -967,6 +975,14 @@ struct Scheduler::State {
       out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
     }
     if (out.capacity < items) with_memory([&] { grow(e.stream, items); });
+    leave_spent(p, e);
+  }
+
+  // The input of a hand-over once its output holds the items: empty, and marked as
+  // given, which run() checks for before it reads the input again.
+  void leave_spent(PassState& p, const EmitterState& e)
+  {
+    auto& in = state(e.handed_from);
     if (in.capacity > 0) allocate(e.handed_from, 0);
     in.count = 0;
     in.known = true;

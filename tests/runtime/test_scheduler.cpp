@@ -96,6 +96,25 @@ template <class T> std::vector<T> sorted(std::vector<T> v)
   return v;
 }
 
+// What test_beget emits from `values`: the next generation.
+std::vector<std::uint32_t> begotten(const std::vector<std::uint32_t>& values)
+{
+  std::vector<std::uint32_t> next;
+  for (const std::uint32_t v : values)
+    for (std::uint32_t k = 0; k < cstreams::test::test_emit_count(v); ++k)
+      next.push_back(cstreams::test::test_hash(v + k + 1));
+  return next;
+}
+
+StreamGraph begetting(StreamId& now, StreamId& next)
+{
+  StreamGraph g;
+  now = g.variable("now", 4, 1024);
+  next = g.variable("next", 4, 1024);
+  g.pass("beget", {program, "test_beget"}).launch_over(now).emit(next).hand_over(now, next).arg(buffer_of(now)).arg(count_of(now));
+  return g;
+}
+
 void check_graph(std::size_t n, Registration registration, std::size_t capacity, std::uint32_t seed)
 {
   auto& ctx = cstreams::test::device();
@@ -764,24 +783,10 @@ TEST_CASE("a pass hands its input's buffer over to what it emits, and the device
           "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
-  const auto beget = [](const std::vector<std::uint32_t>& values) {
-    std::vector<std::uint32_t> next;
-    for (const std::uint32_t v : values)
-      for (std::uint32_t k = 0; k < cstreams::test::test_emit_count(v); ++k)
-        next.push_back(cstreams::test::test_hash(v + k + 1));
-    return next;
-  };
   for (const auto registration : {Registration::segmented_lock, Registration::global_atomic, Registration::lock_free}) {
     INFO("registration = " << to_string(registration));
-    StreamGraph g;
-    const auto now = g.variable("now", 4, 1024), next = g.variable("next", 4, 1024);
-    g.pass("beget", {program, "test_beget"})
-        .launch_over(now)
-        .emit(next)
-        .hand_over(now, next)
-        .arg(buffer_of(now))
-        .arg(count_of(now));
-    Scheduler s(ctx, g, {registration, true});
+    StreamId now, next;
+    Scheduler s(ctx, begetting(now, next), {registration, true});
     // Generations grow about 2.6 times: the input's buffer soon holds too little and
     // a bigger one replaces it; bursts of 40 overflow a group's first segments.
     auto values = random_values(3000, 17);
@@ -789,7 +794,7 @@ TEST_CASE("a pass hands its input's buffer over to what it emits, and the device
     for (int generation = 0; generation < 4; ++generation) {
       INFO("generation " << generation);
       s.run();
-      values = beget(values);
+      values = begotten(values);
       CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(values));
       const auto& streams = s.stats().streams;
       if (registration == Registration::segmented_lock) {
@@ -807,7 +812,7 @@ TEST_CASE("a pass hands its input's buffer over to what it emits, and the device
     values = random_values(500, 19);
     s.upload(now, values);
     s.run();
-    CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(beget(values)));
+    CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(begotten(values)));
     if (registration == Registration::segmented_lock) CHECK(s.capacity(next) == held);
   }
 
@@ -820,6 +825,34 @@ TEST_CASE("a pass hands its input's buffer over to what it emits, and the device
   const auto x = sizes.variable("x", 4, 1), y = sizes.variable("y", 8, 1);
   sizes.pass("p", {program, "k"}).launch_over(x).emit(y).hand_over(x, y);
   CHECK_THROWS_WITH(sizes.schedule(), Catch::Contains("with items of the same size"));
+}
+
+// Short of memory, the pass registers through the global counter, straight into a buffer
+// of the output's own; its input is spent all the same and goes back once the pass is
+// done, as a hand-over leaves it, so that the passes after it have that room.
+TEST_CASE("short of memory for segments, a pass that hands over still leaves the device one of the buffers",
+          "[runtime][scheduler][quick]")
+{
+  StreamId now, next;
+  const StreamGraph g = begetting(now, next);
+  const auto values = random_values(30000, 23);
+  const std::size_t floor = global_counter_peak(g, now, values, [](const Scheduler&) {});
+  Context limited(filter_from_environment());
+  limited.programs().add_sources(test_kernel_sources());
+  limited.set_memory_limit(floor);
+  INFO("limit " << floor << ", the global counter's peak");
+  Scheduler s(limited, g, {Registration::segmented_lock, true});
+  // The second run finds the output's buffer from the first.
+  for (int run = 0; run < 2; ++run) {
+    INFO("run " << run);
+    s.upload(now, values);
+    s.run();
+    CHECK(s.stats().passes.at(0).segment_bytes == 0);
+    CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(begotten(values)));
+    CHECK(s.stats().streams.at(now.index).bytes == 0);
+    CHECK(s.count(now) == 0);
+    CHECK_THROWS_WITH(s.run(), Catch::Contains("stream now gave its buffer to next"));
+  }
 }
 
 TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
