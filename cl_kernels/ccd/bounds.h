@@ -11,6 +11,11 @@
 
 #define CS_DOP_FLOATS 18
 
+/* A face's word: the BVH leaf that holds its box, above six bits of the features the
+ * face owns (broad_phase.cl), so that one load gives the decomposition both. */
+#define CS_FACE_LEAF_SHIFT 6u
+inline uint cs_face_leaf(const uint word) { return word >> CS_FACE_LEAF_SHIFT; }
+
 inline float cs_fdown(float x) { return x - (fabs(x) * 0x1p-23f + FLT_MIN); }
 inline float cs_fup(float x) { return x + (fabs(x) * 0x1p-23f + FLT_MIN); }
 

@@ -71,6 +71,11 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
                        " levels, more than the traversal's stack allows (" + std::to_string(max_tree_depth) + ")");
     l.depth = std::max(l.depth, l.trees[o].depth());
   }
+  std::size_t nodes = 0;
+  for (const Bvh& t : l.trees) nodes += t.nodes.size();
+  if (nodes >= max_scene_nodes)
+    throw InputError("the scene's BVHs have " + std::to_string(nodes) + " nodes, more than the " +
+                     std::to_string(max_scene_nodes - 1) + " a face's word on the device can name");
 
   // Slots: moving objects, then static ones.
   for (int pass = 0; pass < 2; ++pass)
@@ -404,7 +409,7 @@ struct GraphBuilder {
     s.faces = g.fixed("faces", 12, nf);
     s.edges = g.fixed("edges", 8, ne);
     s.nodes = g.fixed("bvh nodes", 16, nn);
-    s.face_boxes = g.fixed("face bounds", 72, nf);
+    s.face_words = g.fixed("face leaves and ownership", 4, nf);
     s.edge_boxes = g.fixed("edge bounds", 72, ne);
     s.vertex_boxes = g.fixed("vertex bounds", 72, nv);
     s.node_boxes = g.fixed("bvh bounds", 72, nn);
@@ -419,7 +424,7 @@ struct GraphBuilder {
     const char* bounds = "ccd/bounds.cl";
     g.pass("swept bounds", {bounds, "cs_primitive_bounds"})
         .launch_items(l.moving_faces + l.moving_edges + l.moving_vertices)
-        .write(s.face_boxes)
+        .update(s.node_boxes)
         .write(s.edge_boxes)
         .write(s.vertex_boxes)
         .arg(buffer_of(s.x0))
@@ -430,7 +435,8 @@ struct GraphBuilder {
         .arg(value_of(cl_uint(l.moving_edges)))
         .arg(value_of(cl_uint(l.moving_vertices)))
         .arg(value_of(separation))
-        .arg(buffer_of(s.face_boxes))
+        .arg(buffer_of(s.face_words))
+        .arg(buffer_of(s.node_boxes))
         .arg(buffer_of(s.edge_boxes))
         .arg(buffer_of(s.vertex_boxes));
     s.refit_ranges = g.fixed("refit ranges", 8, refit.ranges.size());
@@ -441,9 +447,7 @@ struct GraphBuilder {
       g.pass(name, {bounds, "cs_refit_levels"})
           .launch_items((l.levels[band.top + 1] - l.levels[band.top]) * group)
           .update(s.node_boxes)
-          .read(s.face_boxes)
           .arg(buffer_of(s.nodes))
-          .arg(buffer_of(s.face_boxes))
           .arg(buffer_of(s.refit_ranges))
           .arg(value_of(cl_uint(band.first_range)))
           .arg(value_of(cl_uint(band.levels)))
@@ -463,7 +467,6 @@ struct GraphBuilder {
     const std::string front_option = "-DCS_KEEP_FRONT=" + std::to_string(int(keep_front));
     const std::size_t guess = sized(std::max<std::size_t>(1024, nf));
     s.face_edges = g.fixed("face edges", 12, nf);
-    s.owned = g.fixed("ownership", 4, nf);
     if (keep_front) {
       s.front = g.variable("front", 8, sized(std::max(front_size, 4 * nf)));
       s.next_front = g.variable("next front", 8, sized(std::max(front_size, 4 * nf)));
@@ -479,23 +482,22 @@ struct GraphBuilder {
     s.ee = g.variable("ee candidates", 8, guess);
     // The orphan pairs' culls need no front: they go first, before the front update and
     // what it emits take the device's memory.
-    auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, StreamId first,
-                            StreamId second, StreamId& pairs, StreamId& kept) {
+    auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, const char* kernel,
+                            std::vector<StreamId> boxes, StreamId& pairs, StreamId& kept) {
       if (count == 0) return;
       pairs = g.fixed(name, 8, count);
       kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
-      g.pass(std::string("cull ") + name, {program, "cs_cull_pairs", front_option})
-          .launch_over(pairs)
-          .cull(pairs, kept)
-          .arg(buffer_of(pairs))
-          .arg(count_of(pairs))
-          .arg(buffer_of(first))
-          .arg(buffer_of(second));
+      auto& cull = g.pass(std::string("cull ") + name, {program, kernel, front_option})
+                       .launch_over(pairs)
+                       .cull(pairs, kept)
+                       .arg(buffer_of(pairs))
+                       .arg(count_of(pairs));
+      for (StreamId b : boxes) cull.arg(buffer_of(b));
     };
-    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), s.vertex_boxes, s.face_boxes, s.orphan_vf,
-                 s.kept_vf);
-    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), s.edge_boxes, s.edge_boxes, s.orphan_ee,
-                 s.kept_ee);
+    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), "cs_cull_vertex_face_pairs",
+                 {s.vertex_boxes, s.face_words, s.node_boxes}, s.orphan_vf, s.kept_vf);
+    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs", {s.edge_boxes},
+                 s.orphan_ee, s.kept_ee);
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
                        .launch_over(s.front)
                        .read(s.node_boxes)
@@ -527,10 +529,10 @@ struct GraphBuilder {
         .arg(count_of(s.triangle_pairs))
         .arg(buffer_of(s.faces))
         .arg(buffer_of(s.face_edges))
-        .arg(buffer_of(s.owned))
+        .arg(buffer_of(s.face_words))
         .arg(buffer_of(s.vertex_boxes))
         .arg(buffer_of(s.edge_boxes))
-        .arg(buffer_of(s.face_boxes));
+        .arg(buffer_of(s.node_boxes));
   }
 
   // The elementary tests of every candidate stream, each emitting its contacts.

@@ -54,6 +54,11 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
   q.write(s.faces, 0, t.faces.data(), t.faces.size());
   q.write(s.edges, 0, t.edges.data(), t.edges.size());
   q.write(s.nodes, 0, layout.nodes.data(), layout.nodes.size());
+  std::vector<std::uint32_t> face_words(t.owned.begin(), t.owned.end());
+  for (std::size_t n = 0; n < layout.nodes.size(); ++n)
+    if (const std::int32_t face = layout.nodes[n][1]; face >= 0)
+      face_words[std::size_t(face)] |= std::uint32_t(n) << face_leaf_shift;
+  q.write(s.face_words, 0, face_words.data(), face_words.size());
   if (has(s.refit_ranges)) q.write(s.refit_ranges, 0, g.refit_ranges.data(), g.refit_ranges.size());
   for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
     const ObjectDescription& object = scene.objects[o];
@@ -68,15 +73,12 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
     // Static bounds never change: the host's float twin computes them once.
     const FloatBounds b = float_bounds(build_topology(object.faces, x.size()), layout.trees[o], x, x,
                                        float_above(min_separation));
-    q.write(s.face_boxes, sl.first_face, b.faces.data(), b.faces.size());
     q.write(s.edge_boxes, sl.first_edge, b.edges.data(), b.edges.size());
     q.write(s.vertex_boxes, sl.first_vertex, b.vertices.data(), b.vertices.size());
     q.write(s.node_boxes, sl.first_node, b.nodes.data(), b.nodes.size());
   }
   if (!has(s.front)) return exact;
   q.write(s.face_edges, 0, t.face_edges.data(), t.face_edges.size());
-  const std::vector<std::uint32_t> owned(t.owned.begin(), t.owned.end());
-  q.write(s.owned, 0, owned.data(), owned.size());
   if (has(s.orphan_vf)) q.write(s.orphan_vf, 0, layout.orphans.vf.data(), layout.orphans.vf.size());
   if (has(s.orphan_ee)) q.write(s.orphan_ee, 0, layout.orphans.ee.data(), layout.orphans.ee.size());
   q.write(s.vertex_object, 0, layout.vertex_object.data(), layout.vertex_object.size());

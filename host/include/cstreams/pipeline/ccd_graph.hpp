@@ -7,6 +7,7 @@
 #include <cstreams/geometry/topology.hpp>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -28,6 +29,12 @@ struct ObjectSlot {
 };
 
 using NodePair = std::array<std::int32_t, 2>;
+
+// A face's word on the device holds its BVH leaf above Topology::owned's six bits
+// (CS_FACE_LEAF_SHIFT in cl_kernels/ccd/bounds.h): a scene's trees have fewer nodes
+// than 2^26, about 33 million faces.
+constexpr unsigned face_leaf_shift = 6;
+constexpr std::size_t max_scene_nodes = std::size_t(1) << (32 - face_leaf_shift);
 
 // Every object's mesh and BVH in one index space: moving objects first, then static
 // ones, each in scene order, so that per-step passes cover a prefix of every stream.
@@ -86,8 +93,9 @@ struct CcdStreams {
   // The ends of the step after the next, uploaded ahead (Detector::upload_ahead): no
   // pass reads them, and they hold nothing until the first such upload.
   runtime::StreamId x_next, x_next_double;
-  runtime::StreamId faces, edges, nodes, face_edges, owned, vertex_object;
-  runtime::StreamId face_boxes, edge_boxes, vertex_boxes, node_boxes, refit_ranges;
+  runtime::StreamId faces, edges, nodes, face_edges, vertex_object;
+  runtime::StreamId face_words;  // per face: the leaf holding its box << face_leaf_shift | Topology::owned
+  runtime::StreamId edge_boxes, vertex_boxes, node_boxes, refit_ranges;
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
