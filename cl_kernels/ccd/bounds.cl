@@ -4,58 +4,42 @@
 #include "bounds.h"
 #include "runtime/common.h"
 
-inline void cs_swept_dop(__global const float* x0, __global const float* x1, const uint* vertices, const int count,
-                         const float separation, __local float* out)
-{
-  float lo[9], hi[9];
-  cs_dop_empty(lo, hi);
-  for (int i = 0; i < count; ++i) {
-    const uint v = vertices[i];
-    cs_dop_add(lo, hi, x0[3 * v], x0[3 * v + 1], x0[3 * v + 2]);
-    cs_dop_add(lo, hi, x1[3 * v], x1[3 * v + 1], x1[3 * v + 2]);
-  }
-  cs_dop_inflate(lo, hi, separation);
-  for (int k = 0; k < 9; ++k) {
-    out[k] = lo[k];
-    out[9 + k] = hi[k];
-  }
-}
-
-/* One work-item per moving primitive: the nf faces, then the ne edges, then the nv
- * vertices, in one launch rather than one a kind. The group's boxes are staged in local
- * memory and written word by word across the group, neighbouring work-items to
- * neighbouring words: a box a work-item put 72 bytes between the words of one store.
- * A face's box is its BVH leaf's (cs_face_leaf of its word), which the refit then
- * leaves as it is: kept apart as well, the faces' boxes held n-body's 10 MiB twice. */
+/* One work-item per moving face or edge (the nf faces, then the ne edges), in one
+ * launch rather than one a kind; a vertex's box is made where it is read (bounds.h).
+ * The group's boxes are staged in local memory and written word by word across the
+ * group, neighbouring work-items to neighbouring words: a box a work-item put 72 bytes
+ * between the words of one store. A face's box is its BVH leaf's (cs_face_leaf of its
+ * word), which the refit then leaves as it is: kept apart as well, the faces' boxes held
+ * n-body's 10 MiB twice. */
 CS_GROUP_KERNEL void cs_primitive_bounds(__global const float* x0, __global const float* x1,
                                          __global const uint* faces, __global const uint* edges, const uint nf,
-                                         const uint ne, const uint nv, const float separation,
+                                         const uint ne, const float separation,
                                          __global const uint* face_words, __global float* node_boxes,
-                                         __global float* edge_boxes, __global float* vertex_boxes)
+                                         __global float* edge_boxes)
 {
   __local float staged[CS_WG_SIZE * CS_DOP_FLOATS];
   const uint lid = get_local_id(0), first = get_group_id(0) * CS_WG_SIZE, i = first + lid;
-  const uint nfe = nf + ne, total = nfe + nv;
+  const uint total = nf + ne;
   uint vertices[3];
   int count = 0;
   if (i < nf) {
     for (int c = 0; c < 3; ++c) vertices[c] = faces[3 * i + c];
     count = 3;
-  } else if (i < nfe) {
+  } else if (i < total) {
     for (int c = 0; c < 2; ++c) vertices[c] = edges[2 * (i - nf) + c];
     count = 2;
-  } else if (i < total) {
-    vertices[0] = i - nfe;
-    count = 1;
   }
-  if (count) cs_swept_dop(x0, x1, vertices, count, separation, staged + CS_DOP_FLOATS * lid);
+  if (count) {
+    float box[CS_DOP_FLOATS];
+    cs_swept_dop(x0, x1, vertices, count, separation, box);
+    for (int k = 0; k < CS_DOP_FLOATS; ++k) staged[CS_DOP_FLOATS * lid + k] = box[k];
+  }
   barrier(CLK_LOCAL_MEM_FENCE);
   const uint words = min((uint)CS_WG_SIZE, total - first) * CS_DOP_FLOATS;
   for (uint w = lid; w < words; w += CS_WG_SIZE) {
     const uint j = first + w / CS_DOP_FLOATS, k = w % CS_DOP_FLOATS;
     __global float* box = j < nf ? node_boxes + (size_t)CS_DOP_FLOATS * cs_face_leaf(face_words[j])
-                          : j < nfe ? edge_boxes + (size_t)CS_DOP_FLOATS * (j - nf)
-                                    : vertex_boxes + (size_t)CS_DOP_FLOATS * (j - nfe);
+                                 : edge_boxes + (size_t)CS_DOP_FLOATS * (j - nf);
     box[k] = staged[w];
   }
 }

@@ -60,9 +60,7 @@ inline int cs_dop_apart(const float x[CS_DOP_FLOATS], __global const float* b)
 #else
   float y[CS_DOP_FLOATS];
   cs_dop_load(b, y);
-  int apart = 0;
-  for (int k = 0; k < 9; ++k) apart |= (x[k] > y[9 + k]) | (y[k] > x[9 + k]);
-  return apart;
+  return cs_dops_apart(x, y);
 #endif
 }
 
@@ -214,8 +212,9 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
  * id). */
 __kernel void cs_decompose(__global const uint2* pairs, const uint n, __global const uint* faces,
                            __global const uint* face_edges, __global const uint* face_words,
-                           __global const float* vertex_boxes, __global const float* edge_boxes,
-                           __global const float* node_boxes, CS_EMITTER_PARAMS(uint2, vf),
+                           __global const float* x0, __global const float* x1, const float separation,
+                           __global const float* edge_boxes, __global const float* node_boxes,
+                           CS_EMITTER_PARAMS(uint2, vf),
                            CS_EMITTER_PARAMS(uint2, ee))
 {
   CS_EMITTER_BEGIN(vf);
@@ -234,7 +233,9 @@ __kernel void cs_decompose(__global const uint2* pairs, const uint n, __global c
       for (uint k = 0; k < 3; ++k) {
         if (!(o & (1u << k))) continue;
         const uint v = faces[3 * f + k];
-        if (!cs_dop_apart(x, vertex_boxes + CS_DOP_FLOATS * v)) CS_EMIT(vf, (uint2)(v, other));
+        float y[CS_DOP_FLOATS];
+        cs_vertex_dop(x0, x1, v, separation, y);
+        if (!cs_dops_apart(x, y)) CS_EMIT(vf, (uint2)(v, other));
       }
     }
     for (uint a = 0; a < 3; ++a) {
@@ -262,12 +263,14 @@ __kernel void cs_cull_edge_pairs(__global const uint2* pairs, const uint n, __gl
 }
 
 /* Flags orphan vertex-face pairs whose boxes overlap; a face's box is its BVH leaf's. */
-__kernel void cs_cull_vertex_face_pairs(__global const uint2* pairs, const uint n,
-                                        __global const float* vertex_boxes, __global const uint* face_words,
-                                        __global const float* node_boxes, __global uint* keep)
+__kernel void cs_cull_vertex_face_pairs(__global const uint2* pairs, const uint n, __global const float* x0,
+                                        __global const float* x1, const float separation,
+                                        __global const uint* face_words, __global const float* node_boxes,
+                                        __global uint* keep)
 {
   const uint i = get_global_id(0);
   if (i >= n) return;
-  keep[i] = cs_dop_overlap(vertex_boxes + CS_DOP_FLOATS * pairs[i].x,
-                           node_boxes + CS_DOP_FLOATS * cs_face_leaf(face_words[pairs[i].y]));
+  float x[CS_DOP_FLOATS];
+  cs_vertex_dop(x0, x1, pairs[i].x, separation, x);
+  keep[i] = !cs_dop_apart(x, node_boxes + CS_DOP_FLOATS * cs_face_leaf(face_words[pairs[i].y]));
 }

@@ -411,7 +411,6 @@ struct GraphBuilder {
     s.nodes = g.fixed("bvh nodes", 16, nn);
     s.face_words = g.fixed("face leaves and ownership", 4, nf);
     s.edge_boxes = g.fixed("edge bounds", 72, ne);
-    s.vertex_boxes = g.fixed("vertex bounds", 72, nv);
     s.node_boxes = g.fixed("bvh bounds", 72, nn);
   }
 
@@ -423,22 +422,19 @@ struct GraphBuilder {
     if (l.moving_faces == 0) return;
     const char* bounds = "ccd/bounds.cl";
     g.pass("swept bounds", {bounds, "cs_primitive_bounds"})
-        .launch_items(l.moving_faces + l.moving_edges + l.moving_vertices)
+        .launch_items(l.moving_faces + l.moving_edges)
         .update(s.node_boxes)
         .write(s.edge_boxes)
-        .write(s.vertex_boxes)
         .arg(buffer_of(s.x0))
         .arg(buffer_of(s.x1))
         .arg(buffer_of(s.faces))
         .arg(buffer_of(s.edges))
         .arg(value_of(cl_uint(l.moving_faces)))
         .arg(value_of(cl_uint(l.moving_edges)))
-        .arg(value_of(cl_uint(l.moving_vertices)))
         .arg(value_of(separation))
         .arg(buffer_of(s.face_words))
         .arg(buffer_of(s.node_boxes))
-        .arg(buffer_of(s.edge_boxes))
-        .arg(buffer_of(s.vertex_boxes));
+        .arg(buffer_of(s.edge_boxes));
     s.refit_ranges = g.fixed("refit ranges", 8, refit.ranges.size());
     for (const RefitBand& band : refit.bands) {
       const std::size_t last = band.top + band.levels - 1;
@@ -482,22 +478,28 @@ struct GraphBuilder {
     s.ee = g.variable("ee candidates", 8, guess);
     // The orphan pairs' culls need no front: they go first, before the front update and
     // what it emits take the device's memory.
+    // Each returns its pass, where there are pairs, for the arguments of its kernel.
     auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, const char* kernel,
-                            std::vector<StreamId> boxes, StreamId& pairs, StreamId& kept) {
-      if (count == 0) return;
+                            StreamId& pairs, StreamId& kept) -> PassSpec* {
+      if (count == 0) return nullptr;
       pairs = g.fixed(name, 8, count);
       kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
-      auto& cull = g.pass(std::string("cull ") + name, {program, kernel, front_option})
-                       .launch_over(pairs)
-                       .cull(pairs, kept)
-                       .arg(buffer_of(pairs))
-                       .arg(count_of(pairs));
-      for (StreamId b : boxes) cull.arg(buffer_of(b));
+      return &g.pass(std::string("cull ") + name, {program, kernel, front_option})
+                  .launch_over(pairs)
+                  .cull(pairs, kept)
+                  .arg(buffer_of(pairs))
+                  .arg(count_of(pairs));
     };
-    cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(), "cs_cull_vertex_face_pairs",
-                 {s.vertex_boxes, s.face_words, s.node_boxes}, s.orphan_vf, s.kept_vf);
-    cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs", {s.edge_boxes},
-                 s.orphan_ee, s.kept_ee);
+    if (PassSpec* cull = cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(),
+                                      "cs_cull_vertex_face_pairs", s.orphan_vf, s.kept_vf))
+      cull->arg(buffer_of(s.x0))
+          .arg(buffer_of(s.x1))
+          .arg(value_of(separation))
+          .arg(buffer_of(s.face_words))
+          .arg(buffer_of(s.node_boxes));
+    if (PassSpec* cull = cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs",
+                                      s.orphan_ee, s.kept_ee))
+      cull->arg(buffer_of(s.edge_boxes));
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
                        .launch_over(s.front)
                        .read(s.node_boxes)
@@ -530,7 +532,9 @@ struct GraphBuilder {
         .arg(buffer_of(s.faces))
         .arg(buffer_of(s.face_edges))
         .arg(buffer_of(s.face_words))
-        .arg(buffer_of(s.vertex_boxes))
+        .arg(buffer_of(s.x0))
+        .arg(buffer_of(s.x1))
+        .arg(value_of(separation))
         .arg(buffer_of(s.edge_boxes))
         .arg(buffer_of(s.node_boxes));
   }

@@ -95,7 +95,7 @@ struct CcdStreams {
   runtime::StreamId x_next, x_next_double;
   runtime::StreamId faces, edges, nodes, face_edges, vertex_object;
   runtime::StreamId face_words;  // per face: the leaf holding its box << face_leaf_shift | Topology::owned
-  runtime::StreamId edge_boxes, vertex_boxes, node_boxes, refit_ranges;
+  runtime::StreamId edge_boxes, node_boxes, refit_ranges;  // a vertex's box is made where it is read
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
