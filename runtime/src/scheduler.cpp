@@ -911,6 +911,8 @@ struct Scheduler::State {
   // input spent as a hand-over would: held beside it for the rest of the run, the front
   // left the refinement no room under budgets above those that ran (NVIDIA, a generated
   // n-body scene whose step peaks at 10.4 MiB: 8.0 and 8.2 MiB failed, 7.5 ran). Not
+  // before memory runs short: a run that registers through the global counter by choice
+  // keeps both buffers, which then swap from step to step without an allocation. Not
   // where the pass runs in slices, whose later slices read the input.
   void pack_late(PassState& p)
   {

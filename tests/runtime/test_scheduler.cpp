@@ -106,12 +106,18 @@ std::vector<std::uint32_t> begotten(const std::vector<std::uint32_t>& values)
   return next;
 }
 
+// One pass that begets `now`'s next generation into `next`, handing `now`'s buffer over.
 StreamGraph begetting(StreamId& now, StreamId& next)
 {
   StreamGraph g;
   now = g.variable("now", 4, 1024);
   next = g.variable("next", 4, 1024);
-  g.pass("beget", {program, "test_beget"}).launch_over(now).emit(next).hand_over(now, next).arg(buffer_of(now)).arg(count_of(now));
+  g.pass("beget", {program, "test_beget"})
+      .launch_over(now)
+      .emit(next)
+      .hand_over(now, next)
+      .arg(buffer_of(now))
+      .arg(count_of(now));
   return g;
 }
 
