@@ -44,9 +44,8 @@ CS_GROUP_KERNEL void cs_primitive_bounds(__global const float* x0, __global cons
   }
 }
 
-/* nodes: (first child or -1, face or -1, parent, depth) per node. A leaf holds its
- * face's box already (cs_primitive_bounds). */
-inline void cs_refit_node(__global const int4* nodes, const uint node, __global float* node_boxes)
+/* nodes: packed (bounds.h). A leaf holds its face's box already (cs_primitive_bounds). */
+inline void cs_refit_node(__global const int2* nodes, const uint node, __global float* node_boxes)
 {
   const int left = nodes[node].x;
   if (left < 0) return;
@@ -67,7 +66,7 @@ inline void cs_refit_node(__global const int4* nodes, const uint node, __global 
  * level top + d (plan_refit, ccd_graph.cpp). A barrier makes a level's boxes visible to
  * the group before the level above reads them. A launch a level cost its launch and its
  * tail (H100, cloth-ball: 0.14 ms for 18 levels); a group's barrier costs far less. */
-CS_GROUP_KERNEL void cs_refit_levels(__global const int4* nodes, __global const uint2* ranges, const uint first,
+CS_GROUP_KERNEL void cs_refit_levels(__global const int2* nodes, __global const uint2* ranges, const uint first,
                                      const uint depth, __global float* node_boxes)
 {
   ranges += first + (size_t)get_group_id(0) * depth;

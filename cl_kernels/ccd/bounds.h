@@ -16,6 +16,15 @@
 #define CS_FACE_LEAF_SHIFT 6u
 inline uint cs_face_leaf(const uint word) { return word >> CS_FACE_LEAF_SHIFT; }
 
+/* A BVH node in 8 bytes, half of what (first child, face, parent, depth) take apart:
+ * x is the first child of an inner node (>= 0) or -1 - face of a leaf; y is parent + 1
+ * above CS_NODE_DEPTH_BITS of depth in its own tree. The host holds a scene to fewer
+ * than 2^26 nodes and 40 levels (ccd_graph.cpp), which these bits cover. */
+#define CS_NODE_DEPTH_BITS 6u
+inline int cs_node_face(const int2 node) { return -1 - node.x; }
+inline int cs_node_parent(const int2 node) { return (int)((uint)node.y >> CS_NODE_DEPTH_BITS) - 1; }
+inline int cs_node_depth(const int2 node) { return (int)((uint)node.y & ((1u << CS_NODE_DEPTH_BITS) - 1u)); }
+
 inline float cs_fdown(float x) { return x - (fabs(x) * 0x1p-23f + FLT_MIN); }
 inline float cs_fup(float x) { return x + (fabs(x) * 0x1p-23f + FLT_MIN); }
 

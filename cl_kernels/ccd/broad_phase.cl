@@ -4,7 +4,7 @@
  * by their swept bounds. Boxes are 18 floats (bounds.h). Ids are global: every
  * object's vertices, edges, faces and nodes lie in one range of the scene's streams.
  *
- * nodes: int4 (first child or -1, face or -1, parent or -1, depth in its own tree).
+ * nodes: int2 (first child, or -1 - face for a leaf; parent and depth, bounds.h).
  * A BVTT node is a pair of tree nodes (i, j); i == j is a node against itself. A pair
  * of distinct nodes descends the shallower one (the first on a tie, never a leaf), so
  * the parent of (i, j) is (parent(i), j) when i is deeper, else (i, parent(j)); a
@@ -92,26 +92,33 @@ inline int cs_pair_overlaps(__global const float* boxes, const int2 p)
 }
 
 /* Whether a pair of distinct nodes descends its first node. */
-inline int cs_descends_first(const int4 a, const int4 b) { return a.x >= 0 && (b.x < 0 || a.w <= b.w); }
-
-/* The BVTT parent of p, or (-1, -1) for a pair of two roots (a seed of the front). */
-inline int2 cs_bvtt_parent(__global const int4* nodes, const int2 p)
+inline int cs_descends_first(const int2 a, const int2 b)
 {
-  const int4 a = nodes[p.x], b = nodes[p.y];
-  if (p.x == p.y) return a.z < 0 ? (int2)(-1, -1) : (int2)(a.z, a.z);
-  if (a.z >= 0 && a.z == b.z) return (int2)(a.z, a.z);
-  if (a.z < 0 && b.z < 0) return (int2)(-1, -1);
-  return a.w > b.w ? (int2)(a.z, p.y) : (int2)(p.x, b.z);
+  return a.x >= 0 && (b.x < 0 || cs_node_depth(a) <= cs_node_depth(b));
 }
 
-inline int cs_is_first_child(__global const int4* nodes, const int2 parent, const int2 child)
+/* The BVTT parent of p, or (-1, -1) for a pair of two roots (a seed of the front). */
+inline int2 cs_bvtt_parent(__global const int2* nodes, const int2 p)
 {
-  const int4 a = nodes[parent.x], b = nodes[parent.y];
+  const int2 a = nodes[p.x], b = nodes[p.y];
+  const int pa = cs_node_parent(a), pb = cs_node_parent(b);
+  if (p.x == p.y) return pa < 0 ? (int2)(-1, -1) : (int2)(pa, pa);
+  if (pa >= 0 && pa == pb) return (int2)(pa, pa);
+  if (pa < 0 && pb < 0) return (int2)(-1, -1);
+  return cs_node_depth(a) > cs_node_depth(b) ? (int2)(pa, p.y) : (int2)(p.x, pb);
+}
+
+inline int cs_is_first_child(__global const int2* nodes, const int2 parent, const int2 child)
+{
+  const int2 a = nodes[parent.x], b = nodes[parent.y];
   if (parent.x == parent.y) return child.x == a.x && child.y == a.x + 1;
   return cs_descends_first(a, b) ? child.x == a.x : child.y == b.x;
 }
 
-inline uint cs_level(__global const int4* nodes, const int2 p) { return (uint)(nodes[p.x].w + nodes[p.y].w); }
+inline uint cs_level(__global const int2* nodes, const int2 p)
+{
+  return (uint)(cs_node_depth(nodes[p.x]) + cs_node_depth(nodes[p.y]));
+}
 
 /* One work-item per pair of the current front (a cut of the BVTT: every pair of
  * leaves lies under exactly one of its pairs). With CS_KEEP_FRONT, emits the next front:
@@ -129,7 +136,7 @@ inline uint cs_level(__global const int4* nodes, const int2 p) { return (uint)(n
  * CS_SEARCH_TRIPS trips, or whose loops the canary finds cut short, stops and raises
  * cut[0] (cut[1] holds 1): its outputs are incomplete, and the host runs the step
  * again from a finer front. */
-__kernel void cs_front_update(__global const int2* front, const uint n, __global const int4* nodes,
+__kernel void cs_front_update(__global const int2* front, const uint n, __global const int2* nodes,
                               __global const float* node_boxes, __global const uint* faces, const uint cap,
                               __global uint* cut, CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
 {
@@ -169,8 +176,8 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
         }
 #endif
         const int2 q = stack[--top];
-        const int4 a = nodes[q.x], b = nodes[q.y];
-        const uint level = (uint)(a.w + b.w);
+        const int2 a = nodes[q.x], b = nodes[q.y];
+        const uint level = (uint)(cs_node_depth(a) + cs_node_depth(b));
         const int in_front = CS_KEEP_FRONT && level <= cap;
         if (q.x == q.y) {
           if (a.x < 0) continue;
@@ -185,7 +192,8 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
           continue;
         }
         if (a.x < 0 && b.x < 0) {
-          if (!cs_faces_adjacent(faces, (uint)a.y, (uint)b.y)) CS_EMIT(pairs, (uint2)((uint)a.y, (uint)b.y));
+          const uint fa = (uint)cs_node_face(a), fb = (uint)cs_node_face(b);
+          if (!cs_faces_adjacent(faces, fa, fb)) CS_EMIT(pairs, (uint2)(fa, fb));
           if (in_front) CS_FRONT_EMIT(q);
           continue;
         }

@@ -15,6 +15,9 @@ namespace {
 // Depth-first BVTT search holds at most 2 * depth + 1 pairs (see broad_phase.cl);
 // CS_BVTT_STACK = 128 covers trees of up to 40 levels, about 2^39 faces.
 constexpr std::size_t max_tree_depth = 40;
+static_assert(max_tree_depth < (std::size_t(1) << node_depth_bits) &&
+                  max_scene_nodes <= (std::size_t(1) << (32 - node_depth_bits)),
+              "a device node's word holds every depth and parent + 1");
 
 void check_object(const ObjectDescription& o)
 {
@@ -408,7 +411,7 @@ struct GraphBuilder {
     }
     s.faces = g.fixed("faces", 12, nf);
     s.edges = g.fixed("edges", 8, ne);
-    s.nodes = g.fixed("bvh nodes", 16, nn);
+    s.nodes = g.fixed("bvh nodes", 8, nn);
     s.face_words = g.fixed("face leaves and ownership", 4, nf);
     s.edge_boxes = g.fixed("edge bounds", 72, ne);
     s.node_boxes = g.fixed("bvh bounds", 72, nn);

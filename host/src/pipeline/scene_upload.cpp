@@ -4,6 +4,7 @@
 #include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
 
+#include <array>
 #include <string>
 
 namespace cstreams {
@@ -11,6 +12,19 @@ namespace cstreams {
 namespace {
 
 bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
+
+// The nodes as the kernels read them, in half the bytes (bounds.h): the first child or
+// -1 - face, then parent + 1 above the depth's bits.
+std::vector<std::array<std::int32_t, 2>> device_nodes(const SceneLayout& layout)
+{
+  std::vector<std::array<std::int32_t, 2>> packed(layout.nodes.size());
+  for (std::size_t n = 0; n < packed.size(); ++n) {
+    const auto& [child, face, parent, depth] = layout.nodes[n];
+    packed[n] = {child >= 0 ? child : -1 - face,
+                 std::int32_t((std::uint32_t(parent + 1) << node_depth_bits) | std::uint32_t(depth))};
+  }
+  return packed;
+}
 
 }  // namespace
 
@@ -53,7 +67,7 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
   const Topology& t = layout.topology;
   q.write(s.faces, 0, t.faces.data(), t.faces.size());
   q.write(s.edges, 0, t.edges.data(), t.edges.size());
-  q.write(s.nodes, 0, layout.nodes.data(), layout.nodes.size());
+  q.write(s.nodes, 0, device_nodes(layout).data(), layout.nodes.size());
   std::vector<std::uint32_t> face_words(t.owned.begin(), t.owned.end());
   for (std::size_t n = 0; n < layout.nodes.size(); ++n)
     if (const std::int32_t face = layout.nodes[n][1]; face >= 0)

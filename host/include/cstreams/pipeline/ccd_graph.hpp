@@ -35,6 +35,10 @@ using NodePair = std::array<std::int32_t, 2>;
 // than 2^26, about 33 million faces.
 constexpr unsigned face_leaf_shift = 6;
 constexpr std::size_t max_scene_nodes = std::size_t(1) << (32 - face_leaf_shift);
+// A node on the device holds its parent + 1 above this many bits of its depth
+// (CS_NODE_DEPTH_BITS in cl_kernels/ccd/bounds.h), in one word with the scene's node
+// count above.
+constexpr unsigned node_depth_bits = 6;
 
 // Every object's mesh and BVH in one index space: moving objects first, then static
 // ones, each in scene order, so that per-step passes cover a prefix of every stream.
