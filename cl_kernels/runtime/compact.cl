@@ -40,8 +40,8 @@ __kernel void cs_merge_interleaved(__global const uint* items, const uint words,
 __kernel void cs_merge_planned(__global const uint* items, const uint words, __global const uint* counts,
                                __global uint* offsets, const uint segments, __global const uint* plan,
                                const uint planned, const uint fresh, __global const uint* counters,
-                               const uint spill_slot, __global uint* dst, const uint capacity, const uint per_group,
-                               const uint own_offsets)
+                               const uint spill_slot, const uint pool, __global uint* dst, const uint capacity,
+                               const uint per_group, const uint own_offsets)
 {
   __local uint start[CS_MERGE_SEGMENTS + 1u], from[CS_MERGE_SEGMENTS], to[CS_MERGE_SEGMENTS];
   __local uint partial[CS_WG_SIZE];
@@ -92,7 +92,7 @@ __kernel void cs_merge_planned(__global const uint* items, const uint words, __g
     }
   } else {
     const uint x = (g - groups) * size + lid;
-    if (x < min(counters[spill_slot], segments * CS_SPILL_PER_GROUP)) {
+    if (x < min(counters[spill_slot], pool)) {
       const uint o = offsets[counts[segments + 2u * x]] + counts[segments + 2u * x + 1u];
       if (o < capacity) cs_copy_item(items, cs_segment_base(plan, planned, fresh, segments) + x, dst, o, words);
     }

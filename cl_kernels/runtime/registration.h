@@ -9,18 +9,19 @@
  *   }
  *
  * The scheduler builds the program with CS_REGISTRATION set to one of the modes below,
- * appends the five emitter arguments per emitted stream, launches with CS_WG_SIZE
+ * appends the nine emitter arguments per emitted stream, launches with CS_WG_SIZE
  * work-items per group and packs the result:
  *   CS_REG_GLOBAL_ATOMIC   one device counter for the whole stream (the baseline);
  *   CS_REG_SEGMENTED_LOCK  a segment per work-group claimed through a local counter,
  *                          then prefix sum and merge (the paper's segmented lock).
  *                          Segments are planned from the last run: group g's segment
- *                          holds what group g emitted then and a quarter more
+ *                          holds what group g emitted then and an eighth more
  *                          (cs_segment_base below), so memory follows the work where
  *                          it is, not the busiest group. What a segment cannot hold
- *                          goes to a spill pool of CS_SPILL_PER_GROUP items a group,
- *                          shared by all groups through the overflow slot, with its
- *                          group and rank, so that the merge still puts it in order;
+ *                          goes to a spill pool of P_pool items shared by all groups
+ *                          through the overflow slot, with its group and rank, so
+ *                          that the merge still puts it in order (the scheduler sizes
+ *                          the pool by what spilled in the last runs);
  *   CS_REG_LOCK_FREE       a segment per work-item with a private counter, then
  *                          prefix sum and merge (the paper's lock-free variant).
  * Counters keep counting past capacity, so the host learns what to grow to: a lock-free
@@ -35,20 +36,20 @@
 
 /* Segmented lock: where group g's segment starts, given the last run's segment offsets
  * `plan` (planned groups, then their total). A group the last run had gets what it
- * emitted then and a quarter more; a group it did not have gets `fresh`. The spill
+ * emitted then and an eighth more (with a quarter, n-body's step held 10 MiB more at
+ * its peak for what its pool took); a group it did not have gets `fresh`. The spill
  * pool follows the last group's segment. The scheduler sizes the buffer by the same
  * rules (segment_items in scheduler.cpp). */
-#define CS_SPILL_PER_GROUP 16u
 inline uint cs_segment_base(__global const uint* plan, const uint planned, const uint fresh, const uint g)
 {
   const uint k = min(g, planned), o = plan[k];
-  return o + o / 4u + (g - k) * fresh;
+  return o + o / 8u + (g - k) * fresh;
 }
 
 #define CS_EMITTER_PARAMS(T, P)                                                               \
   __global T* P##_out, __global uint* P##_counts, const uint P##_capacity,                    \
       __global uint* P##_counters, const uint P##_slot, __global const uint* P##_plan,        \
-      const uint P##_planned, const uint P##_total_slot
+      const uint P##_planned, const uint P##_pool, const uint P##_total_slot
 
 #if !defined(CS_REGISTRATION)
 /* Built outside a scheduler: any use of an emitter fails to compile with this name
@@ -95,7 +96,7 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
     } else {                                                                                  \
       const uint cs_groups_ = (uint)get_num_groups(0);                                        \
       const uint cs_spill_ = atomic_inc(&P##_counters[P##_slot]);                             \
-      if (cs_spill_ < cs_groups_ * CS_SPILL_PER_GROUP) {                                      \
+      if (cs_spill_ < P##_pool) {                                                             \
         P##_out[P##_segment[2] + cs_spill_] = (value);                                        \
         P##_counts[cs_groups_ + 2u * cs_spill_] = (uint)get_group_id(0);                      \
         P##_counts[cs_groups_ + 2u * cs_spill_ + 1u] = cs_at_;                                \

@@ -63,10 +63,14 @@ struct EmitterState {
   // Segmented lock, where no plan fits: what a group may hold at most, from a forgotten
   // plan's total spread over this run's groups (0: no such total).
   std::size_t fresh = 0;
+  // Segmented lock: the items the spill pool of this execution holds; what the last
+  // run spilled, where its segments were planned from the run before (at most twice
+  // its pool); and whether this execution's plan is its own input's counts (a rerun).
+  std::size_t pool = 0, spilled = 0;
+  bool exact_plan = false;
 };
 
-// Segmented lock: the spill pool's items per group (CS_SPILL_PER_GROUP in
-// cl_kernels/runtime/registration.h).
+// Segmented lock: the spill pool's items per group that the last run did not plan.
 constexpr std::uint64_t spill_per_group = 16;
 // Segments of an output packed late up to which its merge adds up the counts before each
 // group's segments itself (a few loads a work-item) rather than after a scan's launch.
@@ -522,6 +526,7 @@ struct Scheduler::State {
         k.set_arg(index++, cl_uint(dst.slot));
         k.set_arg(index++, counters);
         k.set_arg(index++, cl_uint(0));
+        k.set_arg(index++, cl_uint(0));
       } else if (p.mode == Registration::segmented_lock) {
         k.set_arg(index++, e.items);
         k.set_arg(index++, e.counts);
@@ -530,6 +535,7 @@ struct Scheduler::State {
         k.set_arg(index++, cl_uint(e.overflow_slot));
         k.set_arg(index++, plan_of(e));
         k.set_arg(index++, cl_uint(e.planned));
+        k.set_arg(index++, cl_uint(e.pool));
       } else {
         k.set_arg(index++, e.items);
         k.set_arg(index++, e.counts);
@@ -537,6 +543,7 @@ struct Scheduler::State {
         k.set_arg(index++, counters);
         k.set_arg(index++, cl_uint(e.overflow_slot));
         k.set_arg(index++, e.counts);
+        k.set_arg(index++, cl_uint(0));
         k.set_arg(index++, cl_uint(0));
       }
       k.set_arg(index++, cl_uint(dst.slot));
@@ -562,7 +569,20 @@ struct Scheduler::State {
     if (segments == 0) return 0;
     if (options.registration == Registration::lock_free) return std::uint64_t(segments) * e.segment_capacity;
     const std::uint64_t planned = std::min(segments, e.planned), total = e.planned_total;
-    return total + total / 4 + (segments - planned) * first_segment_capacity(e) + segments * spill_per_group;
+    return total + total / 8 + (segments - planned) * first_segment_capacity(e) + spill_pool_items(e, segments);
+  }
+
+  // A planned group spills only what it emits beyond its last run's and an eighth: the
+  // pool holds twice what the last run spilled, and an item a group or one group's
+  // burst of 16 items a work-item, whichever is more (16 a group took 9 MiB of n-body's
+  // step at its peak, and none spilled). A pool that overflows grows fourfold for the
+  // next run; a rerun, planned from its own input, spills nothing. A group the plan
+  // lacks has no such history.
+  std::uint64_t spill_pool_items(const EmitterState& e, std::size_t segments) const
+  {
+    const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
+    const std::uint64_t least = planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * context.work_group_size()) : 0;
+    return std::max(least, 2 * spilled) + (segments - planned) * spill_per_group;
   }
 
   // Segments follow the last run, so one burst (a first step searched from the roots,
@@ -599,6 +619,7 @@ struct Scheduler::State {
   void prepare_segments(EmitterState& e, std::size_t global)
   {
     e.segments = segment_count(global);
+    e.pool = options.registration == Registration::segmented_lock ? std::size_t(spill_pool_items(e, e.segments)) : 0;
     const std::size_t bytes = std::size_t(segment_items(e, e.segments)) * spec(e.stream).element_bytes;
     // Segments still held from this run's overflowing execution are written anew: kept
     // while they fit.
@@ -607,8 +628,7 @@ struct Scheduler::State {
     e.needed = bytes;
     e.segment_bytes = e.items.bytes();
     // Segmented lock: each spilled item's group and rank follow the counts.
-    const std::size_t words = options.registration == Registration::segmented_lock ? 1 + 2 * spill_per_group : 1;
-    take_stage_scratch(e.counts, e.counts_at, e.segments * words * sizeof(cl_uint), "registration counts");
+    take_stage_scratch(e.counts, e.counts_at, (e.segments + 2 * e.pool) * sizeof(cl_uint), "registration counts");
   }
 
   void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
@@ -860,10 +880,10 @@ struct Scheduler::State {
       scan.exclusive(e.counts, e.offsets, e.segments, counters, no_slot, tl(), p.spec->name.c_str());
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
                            cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
-                           cl_uint(e.overflow_slot), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group),
+                           cl_uint(e.overflow_slot), cl_uint(e.pool), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group),
                            cl_uint(own_offsets));
     const std::size_t groups = (e.segments + per_group - 1) / per_group;
-    const std::size_t spill_groups = own_offsets ? 0 : (e.segments * spill_per_group + wg - 1) / wg;
+    const std::size_t spill_groups = own_offsets ? 0 : (e.pool + wg - 1) / wg;
     context.launch(merge_planned, copy ? (groups + spill_groups) * wg : 1, wg, tl(), p.spec->name);
   }
 
@@ -996,7 +1016,7 @@ struct Scheduler::State {
   // all fit its segment.
   bool segments_overflowed(const PassState& p, const EmitterState& e) const
   {
-    if (p.mode == Registration::segmented_lock) return host_counters[e.overflow_slot] > e.segments * spill_per_group;
+    if (p.mode == Registration::segmented_lock) return host_counters[e.overflow_slot] > e.pool;
     return p.mode == Registration::lock_free && host_counters[e.overflow_slot] > e.segment_capacity;
   }
 
@@ -1022,6 +1042,8 @@ struct Scheduler::State {
     e.planned = e.segments;
     e.planned_total = host_counters[state(e.stream).slot];
     e.fresh = 0;
+    if (!e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], 2 * e.pool);
+    e.exact_plan = false;
   }
 
   // After the stage's counters are read: whether the emitter's items outgrew its stream
@@ -1116,8 +1138,10 @@ struct Scheduler::State {
             if (segments_overflowed(*p, e)) {
               // The rerun plans from this execution's counts, so every group fits.
               if (packs_late(*p, e)) merge_segments(*p, e, false);
-              if (p->mode == Registration::segmented_lock) adopt_plan(e);
-              else e.segment_capacity = grown(host_counters[e.overflow_slot]);
+              if (p->mode == Registration::segmented_lock) {
+                adopt_plan(e);
+                e.exact_plan = true;
+              } else e.segment_capacity = grown(host_counters[e.overflow_slot]);
               r = Redo::full;
             }
             if (outgrew(*p, e)) {
@@ -1199,7 +1223,10 @@ struct Scheduler::State {
       p.handed_over = false;
       p.ran = false;
       if (p.list) p.list->settled = false;
-      for (auto& e : p.emitters) e.segment_bytes = 0;
+      for (auto& e : p.emitters) {
+        e.segment_bytes = 0;
+        e.exact_plan = false;
+      }
     }
     stage_needs.clear();
     start_arena();

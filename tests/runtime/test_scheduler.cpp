@@ -248,11 +248,12 @@ TEST_CASE("segmented-lock segments follow the last run, and what they cannot hol
   auto v = random_values(n, 5);
   run(v);
   CHECK(run(v) == 0);  // planned from the same counts
-  // One group bursts far past its plan's quarter more: the spill pool holds the rest.
+  // One group bursts far past its plan's eighth more: the spill pool holds the rest.
   for (std::size_t i = 3 * wg; i < 3 * wg + 12; ++i) v[i] = burst;
   CHECK(run(v) == 0);
-  // Half the groups burst: more than the pool holds (16 items a group), so the pass runs
-  // again, planned from this run's counts.
+  // Half the groups burst: more than the pool holds (twice what spilled last run, at
+  // least 16 items a work-item of one group), so the pass runs again, planned from this
+  // run's counts.
   for (std::size_t i = 0; i < n / 2; ++i) v[i] = burst;
   CHECK(run(v) == 1);
   CHECK(run(v) == 0);
