@@ -64,8 +64,8 @@ struct EmitterState {
   // plan's total spread over this run's groups (0: no such total).
   std::size_t fresh = 0;
   // Segmented lock: the items the spill pool of this execution holds; what the last
-  // run spilled, where its segments were planned from the run before (at most twice
-  // its pool); and whether this execution's plan is its own input's counts (a rerun).
+  // execution planned from another run spilled (adopt_plan); and whether this
+  // execution's plan is its own input's counts (a rerun).
   std::size_t pool = 0, spilled = 0;
   bool exact_plan = false;
 };
@@ -577,7 +577,7 @@ struct Scheduler::State {
   // burst of 16 items a work-item, whichever is more (16 a group took 9 MiB of n-body's
   // step at its peak, and none spilled). A pool that overflows grows fourfold for the
   // next run; a rerun, planned from its own input, spills nothing. A group the plan
-  // lacks has no such history.
+  // lacks gets 16 items.
   std::uint64_t spill_pool_items(const EmitterState& e, std::size_t segments) const
   {
     const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
@@ -1035,14 +1035,16 @@ struct Scheduler::State {
     e.planned = e.planned_total = 0;
   }
 
-  // Segmented lock: this execution's counts plan the next one's segments.
+  // Segmented lock: this execution's counts plan the next one's segments, and what it
+  // spilled (up to twice its pool) the next one's pool. Not a rerun's, planned from its
+  // own counts: the pool follows how much a step outgrows the one before.
   void adopt_plan(EmitterState& e)
   {
+    if (!e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], 2 * e.pool);
     std::swap(e.plan, e.offsets);
     e.planned = e.segments;
     e.planned_total = host_counters[state(e.stream).slot];
     e.fresh = 0;
-    if (!e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], 2 * e.pool);
     e.exact_plan = false;
   }
 

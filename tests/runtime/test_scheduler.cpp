@@ -259,6 +259,38 @@ TEST_CASE("segmented-lock segments follow the last run, and what they cannot hol
   CHECK(run(v) == 0);
 }
 
+TEST_CASE("a spill pool that overflowed grows: steps that each outgrow the last alike rerun once",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 20000, wg = ctx.work_group_size();
+  StreamGraph g;
+  auto values = g.fixed("values", 4, n);
+  auto pairs = g.variable("pairs", 8, 1);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  const auto run = [&](const std::vector<std::uint32_t>& v) {
+    s.upload(values, v);
+    s.run();
+    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(v).pairs));
+    return s.stats().passes.at(0).reruns;
+  };
+  // Each step, half a group's values more burst (40 items each, where their plan holds
+  // a few): more spills than a pool of 16 items for each of a group's work-items holds,
+  // the least a planned pool holds, and what a pool of 16 items a group held here.
+  auto v = random_values(n, 61);
+  run(v);
+  CHECK(run(v) == 0);
+  std::size_t first = 0, later = 0;
+  for (std::size_t step = 1; step <= 4; ++step) {
+    for (std::size_t i = 2 * wg + (step - 1) * wg / 2; i < 2 * wg + step * wg / 2 && i < n; ++i)
+      v[i] = cstreams::test::value_emitting(40);
+    (step == 1 ? first : later) += run(v);
+  }
+  CHECK(first <= 1);
+  CHECK(later == 0);
+}
+
 // Values expand into pairs; in the next stage a pass copies the pairs' first words, one
 // per pair: half the bytes.
 struct ExpandThenCopy {
