@@ -64,7 +64,7 @@ struct EmitterState {
   // plan's total spread over this run's groups (0: no such total).
   std::size_t fresh = 0;
   // Segmented lock: the items the spill pool of this execution holds; what the last
-  // execution planned from another run spilled (adopt_plan); and whether this
+  // execution planned from another run's counts spilled (adopt_plan); and whether this
   // execution's plan is its own input's counts (a rerun).
   std::size_t pool = 0, spilled = 0;
   bool exact_plan = false;
@@ -1024,23 +1024,25 @@ struct Scheduler::State {
   // from the roots, say) says nothing about this one's groups: they start afresh. Its
   // total still says how much the pass emits where its input is the last run's output
   // (the second step's front update, over the front the first step's search found), so
-  // no group starts with more than that total spread evenly, and a quarter more: cloth-
+  // no group starts with more than that total spread evenly, and an eighth more: cloth-
   // ball's second step held 112 MB of segments sized by the expected items, 80 MB in
   // later steps. Where the pass runs in slices, the expected items are fewer.
   static void forget_stale_plan(EmitterState& e, std::size_t segments)
   {
     if (!(segments + e.planned / 8 < e.planned || segments > e.planned + e.planned / 8)) return;
-    const std::size_t total = e.planned_total + e.planned_total / 4;
+    const std::size_t total = e.planned_total + e.planned_total / 8;
     if (total > 0 && segments > 0) e.fresh = (total + segments - 1) / segments;
     e.planned = e.planned_total = 0;
   }
 
-  // Segmented lock: this execution's counts plan the next one's segments, and what it
-  // spilled (up to twice its pool) the next one's pool. Not a rerun's, planned from its
-  // own counts: the pool follows how much a step outgrows the one before.
+  // Segmented lock: this execution's counts plan the next one's segments, and where its
+  // own were planned from the run before, what it spilled (up to twice its pool) sizes
+  // the next pool: how much a step outgrows the one before. Not an unplanned execution's
+  // (a first step's, searched from the roots: cloth-ball's next steps then peaked 11%
+  // above a settled one), nor a rerun's, planned from its own counts.
   void adopt_plan(EmitterState& e)
   {
-    if (!e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], 2 * e.pool);
+    if (e.planned > 0 && !e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], 2 * e.pool);
     std::swap(e.plan, e.offsets);
     e.planned = e.segments;
     e.planned_total = host_counters[state(e.stream).slot];

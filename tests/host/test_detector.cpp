@@ -789,12 +789,14 @@ TEST_CASE("contacts do not depend on the work-group size a device runs", "[detec
   }
 }
 
-TEST_CASE("no step of cloth-ball peaks above what a settled one holds", "[detector][slow]")
+TEST_CASE("no step of cloth-ball peaks above 200 MiB, nor far above what a settled one holds", "[detector][slow]")
 {
-  // Issue 12 asks for 200 MiB on cloth-ball, which settled cubic steps hold (192 MiB on
-  // pocl and the H200). The first step, searched from the roots, sized its candidates'
+  // Issue 12 asks for 200 MiB on cloth-ball, which settled cubic steps hold (161 MiB on
+  // pocl and the H100). The first step, searched from the roots, sized its candidates'
   // segments for two of each a triangle pair (201 MiB); the third, the first with a
   // step arena, ran beside the contact readback's scratch of the step before (203 MiB).
+  // The first steps, whose segments no run has planned yet, peak at up to 172 MiB, 7%
+  // above a settled step.
   const Scene scene = cstreams::test::cloth_ball();
   const Step step = load_step(scene, 0);
   runtime::Context context(filter_from_environment());
@@ -809,7 +811,8 @@ TEST_CASE("no step of cloth-ball peaks above what a settled one holds", "[detect
   const std::size_t held = context.memory_in_use();
   for (std::size_t k = 0; k < peaks.size(); ++k) {
     INFO("step " << k << " peaks at " << peaks[k] << " bytes; settled, the detector holds " << held);
-    CHECK(double(peaks[k]) <= 1.01 * double(held));
+    CHECK(peaks[k] <= std::size_t(200) << 20);
+    CHECK(double(peaks[k]) <= 1.1 * double(held));
   }
 }
 
