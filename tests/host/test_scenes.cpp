@@ -50,6 +50,19 @@ TEST_CASE("generated scenes are deterministic in their seed", "[host][scenes][qu
   CHECK(files == 5);  // four frames and the manifest
 }
 
+TEST_CASE("a step reads each frame file once for all the objects split from it", "[host][scenes][quick]")
+{
+  const Scene nbody = load_scene(scenes::generate_scene({"n-body", fresh_folder("reads"), 1, 3, 0}));
+  REQUIRE(nbody.objects.size() == 300);
+  const std::size_t before = nbody.files_read();
+  const Step first = load_step(nbody, 0);
+  CHECK(nbody.files_read() - before == 2);
+  const Step second = load_step(nbody, 1);
+  CHECK(nbody.files_read() - before <= 4);
+  // The second step starts where the first ended, body by body.
+  for (std::uint32_t o = 0; o < nbody.objects.size(); ++o) CHECK(second.x0[o] == first.x1[o]);
+}
+
 TEST_CASE("generated scenes have the documented sizes and collide", "[host][scenes][quick]")
 {
   const Scene cloth = load_scene(scenes::generate_scene({"cloth-sphere", fresh_folder("cloth"), 1, 3, 0}));

@@ -16,10 +16,12 @@ Step load_step(const Scene& scene, std::size_t frame)
   Step step;
   step.scene = &scene;
   const std::size_t next = scene.frame_count() > 1 ? frame + 1 : frame;
-  for (std::uint32_t o = 0; o < scene.objects.size(); ++o) {
-    step.x0.push_back(scene.positions(o, frame));
-    step.x1.push_back(scene.objects[o].kind == ObjectKind::static_ ? step.x0.back() : scene.positions(o, next));
-  }
+  // Frame by frame, not object by object: the objects of a split mesh share their frame
+  // files, which the scene reads one at a time (the 300 bodies of the generated n-body
+  // scene took 600 reads, 22 s, a step).
+  for (std::uint32_t o = 0; o < scene.objects.size(); ++o) step.x0.push_back(scene.positions(o, frame));
+  for (std::uint32_t o = 0; o < scene.objects.size(); ++o)
+    step.x1.push_back(scene.objects[o].kind == ObjectKind::static_ ? step.x0[o] : scene.positions(o, next));
   return step;
 }
 

@@ -30,19 +30,24 @@ ObjectKind parse_object_kind(const std::string& text)
   throw InputError("unknown object kind '" + text + "' (deformable, rigid or static)");
 }
 
-// The last frame file read, and the faces and vertex count of each object's first
-// frame, against which every later frame is checked.
+// The last frame file read, the first frame it was last found to match, and the faces
+// and vertex count of each object's first frame, against which every later frame is
+// checked. The objects of a mesh split into its components share both files: the
+// frame is read and checked once for all of them.
 struct Scene::Cache {
-  std::string path;
+  std::string path, matched_first;
   Mesh mesh;
   std::map<std::string, Mesh> first_frames;
+  std::size_t reads = 0;
 
   const Mesh& load(const std::string& file)
   {
     if (file != path) {
       path.clear();
+      matched_first.clear();
       mesh = read_mesh(file);
       path = file;
+      ++reads;
     }
     return mesh;
   }
@@ -96,6 +101,25 @@ std::size_t Scene::vertex_count() const
   return n;
 }
 
+namespace {
+
+void check_frame(const std::string& file, const Mesh& mesh, const std::string& first_file, const Mesh& first)
+{
+  if (mesh.positions.size() != first.positions.size())
+    throw InputError(file + ": has " + std::to_string(mesh.positions.size()) + " vertices but the first frame " +
+                     first_file + " has " + std::to_string(first.positions.size()));
+  if (mesh.faces != first.faces) {
+    std::size_t f = 0;
+    while (f < std::min(mesh.faces.size(), first.faces.size()) && mesh.faces[f] == first.faces[f]) ++f;
+    throw InputError(file + ": faces differ from the first frame " + first_file + " (from face " + std::to_string(f) +
+                     ")");
+  }
+}
+
+}  // namespace
+
+std::size_t Scene::files_read() const { return cache_->reads; }
+
 std::vector<Vec3> Scene::positions(std::uint32_t object, std::size_t frame) const
 {
   if (object >= objects.size()) throw InputError("scene " + name + " has no object " + std::to_string(object));
@@ -106,15 +130,8 @@ std::vector<Vec3> Scene::positions(std::uint32_t object, std::size_t frame) cons
   const std::string& file = o.frame_files[std::min(frame, o.frame_files.size() - 1)];
   const Mesh& first = cache_->first_frames.at(o.frame_files.front());
   const Mesh& mesh = cache_->load(file);
-  if (mesh.positions.size() != first.positions.size())
-    throw InputError(file + ": has " + std::to_string(mesh.positions.size()) + " vertices but the first frame " +
-                     o.frame_files.front() + " has " + std::to_string(first.positions.size()));
-  if (mesh.faces != first.faces) {
-    std::size_t f = 0;
-    while (f < std::min(mesh.faces.size(), first.faces.size()) && mesh.faces[f] == first.faces[f]) ++f;
-    throw InputError(file + ": faces differ from the first frame " + o.frame_files.front() + " (from face " +
-                     std::to_string(f) + ")");
-  }
+  if (cache_->matched_first != o.frame_files.front()) check_frame(file, mesh, o.frame_files.front(), first);
+  cache_->matched_first = o.frame_files.front();
   if (o.vertices.empty()) return mesh.positions;
   std::vector<Vec3> out(o.vertices.size());
   for (std::size_t i = 0; i < out.size(); ++i) out[i] = mesh.positions[o.vertices[i]];

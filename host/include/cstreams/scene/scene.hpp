@@ -63,6 +63,9 @@ public:
   // Whether objects a and b (a may equal b: self-collision) need collision detection.
   bool may_collide(std::uint32_t a, std::uint32_t b) const;
   std::vector<Vec3> positions(std::uint32_t object, std::size_t frame) const;
+  // Mesh files parsed for positions so far: a step reads each of its frames once,
+  // for all the objects they hold.
+  std::size_t files_read() const;
   std::uint32_t object_index(const std::string& object_name) const;
   std::size_t face_count() const;
   std::size_t vertex_count() const;
