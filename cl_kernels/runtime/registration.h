@@ -21,7 +21,7 @@
  *                          goes to a spill pool of P_pool items shared by all groups
  *                          through the overflow slot, with its group and rank, so
  *                          that the merge still puts it in order (the scheduler sizes
- *                          the pool by what spilled in the last runs);
+ *                          the pool by what spilled in the last run);
  *   CS_REG_LOCK_FREE       a segment per work-item with a private counter, then
  *                          prefix sum and merge (the paper's lock-free variant).
  * Counters keep counting past capacity, so the host learns what to grow to: a lock-free
@@ -36,8 +36,8 @@
 
 /* Segmented lock: where group g's segment starts, given the last run's segment offsets
  * `plan` (planned groups, then their total). A group the last run had gets what it
- * emitted then and an eighth more (with a quarter, n-body's step held 10 MiB more at
- * its peak for what its pool took); a group it did not have gets `fresh`. The spill
+ * emitted then and an eighth more (with a quarter, n-body's settled step held 10 MiB
+ * more at its peak); a group it did not have gets `fresh`. The spill
  * pool follows the last group's segment. The scheduler sizes the buffer by the same
  * rules (segment_items in scheduler.cpp). */
 inline uint cs_segment_base(__global const uint* plan, const uint planned, const uint fresh, const uint g)

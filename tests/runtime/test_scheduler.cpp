@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <random>
 
 const cstreams::runtime::SourceSet& test_kernel_sources();
@@ -224,68 +225,70 @@ TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][sche
   CHECK(s.download<Pair>(pairs) == std::vector<Pair>(all.begin(), all.begin() + std::ptrdiff_t(half)));
 }
 
+// One pass that expands values into pairs, through segmented locks. run(v) runs `v`,
+// checks every item and the merge's order by group, and returns the pass's reruns.
+struct SegmentedExpansion {
+  static constexpr std::size_t n = 20000;
+  Context& ctx = cstreams::test::device();
+  const std::size_t wg = ctx.work_group_size();
+  StreamGraph g;
+  const StreamId values = g.fixed("values", 4, n), pairs = g.variable("pairs", 8, 1);
+  std::unique_ptr<Scheduler> s;
+
+  SegmentedExpansion()
+  {
+    g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+    s = std::make_unique<Scheduler>(ctx, g, SchedulerOptions{Registration::segmented_lock, true});
+  }
+
+  std::size_t run(const std::vector<std::uint32_t>& v)
+  {
+    s->upload(values, v);
+    s->run();
+    const auto got = s->download<Pair>(pairs);
+    CHECK(sorted(got) == sorted(cstreams::test::reference(v).pairs));
+    CHECK(std::is_sorted(got.begin(), got.end(), [&](const Pair& a, const Pair& b) { return a[0] / wg < b[0] / wg; }));
+    return s->stats().passes.at(0).reruns;
+  }
+};
+
 TEST_CASE("segmented-lock segments follow the last run, and what they cannot hold spills into its group's place",
           "[runtime][scheduler][quick]")
 {
-  auto& ctx = cstreams::test::device();
-  const std::size_t n = 20000, wg = ctx.work_group_size();
-  StreamGraph g;
-  auto values = g.fixed("values", 4, n);
-  auto pairs = g.variable("pairs", 8, 1);
-  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
-  Scheduler s(ctx, g, {Registration::segmented_lock, true});
-  // Runs `v`; checks every item and the merge's order by group; returns the reruns.
-  const auto run = [&](const std::vector<std::uint32_t>& v) {
-    s.upload(values, v);
-    s.run();
-    const auto got = s.download<Pair>(pairs);
-    CHECK(sorted(got) == sorted(cstreams::test::reference(v).pairs));
-    CHECK(std::is_sorted(got.begin(), got.end(), [&](const Pair& a, const Pair& b) { return a[0] / wg < b[0] / wg; }));
-    return s.stats().passes.at(0).reruns;
-  };
+  SegmentedExpansion e;
+  const std::size_t n = e.n, wg = e.wg;
   const std::uint32_t burst = cstreams::test::value_emitting(40);
 
   auto v = random_values(n, 5);
-  run(v);
-  CHECK(run(v) == 0);  // planned from the same counts
+  e.run(v);
+  CHECK(e.run(v) == 0);  // planned from the same counts
   // One group bursts far past its plan's eighth more: the spill pool holds the rest.
   for (std::size_t i = 3 * wg; i < 3 * wg + 12; ++i) v[i] = burst;
-  CHECK(run(v) == 0);
+  CHECK(e.run(v) == 0);
   // Half the groups burst: more than the pool holds (twice what spilled last run, at
   // least 16 items a work-item of one group), so the pass runs again, planned from this
   // run's counts.
   for (std::size_t i = 0; i < n / 2; ++i) v[i] = burst;
-  CHECK(run(v) == 1);
-  CHECK(run(v) == 0);
+  CHECK(e.run(v) == 1);
+  CHECK(e.run(v) == 0);
 }
 
 TEST_CASE("a spill pool that overflowed grows: steps that each outgrow the last alike rerun once",
           "[runtime][scheduler][quick]")
 {
-  auto& ctx = cstreams::test::device();
-  const std::size_t n = 20000, wg = ctx.work_group_size();
-  StreamGraph g;
-  auto values = g.fixed("values", 4, n);
-  auto pairs = g.variable("pairs", 8, 1);
-  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
-  Scheduler s(ctx, g, {Registration::segmented_lock, true});
-  const auto run = [&](const std::vector<std::uint32_t>& v) {
-    s.upload(values, v);
-    s.run();
-    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(v).pairs));
-    return s.stats().passes.at(0).reruns;
-  };
+  SegmentedExpansion e;
+  const std::size_t n = e.n, wg = e.wg;
   // Each step, half a group's values more burst (40 items each, where their plan holds
   // a few): more spills than a pool of 16 items for each of a group's work-items holds,
   // the least a planned pool holds, and what a pool of 16 items a group held here.
   auto v = random_values(n, 61);
-  run(v);
-  CHECK(run(v) == 0);
+  e.run(v);
+  CHECK(e.run(v) == 0);
   std::size_t first = 0, later = 0;
   for (std::size_t step = 1; step <= 4; ++step) {
     for (std::size_t i = 2 * wg + (step - 1) * wg / 2; i < 2 * wg + step * wg / 2 && i < n; ++i)
       v[i] = cstreams::test::value_emitting(40);
-    (step == 1 ? first : later) += run(v);
+    (step == 1 ? first : later) += e.run(v);
   }
   CHECK(first <= 1);
   CHECK(later == 0);
