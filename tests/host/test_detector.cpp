@@ -839,8 +839,12 @@ TEST_CASE("a detector's memory settles at what its steps plan, and no step peaks
                            << peaks[2]);
     CHECK(held[4] == held[3]);
     CHECK(peaks[4] == held[4]);  // a settled step allocates nothing
-    // Segments sized for four items a front pair, as they were, took 2.7 times.
-    for (std::size_t peak : peaks) CHECK(double(peak) <= 2 * double(held.back()));
+    // Segments sized for four items a front pair, as they were, took 2.7 times what a
+    // settled step then held, which has since held less (segments an eighth over their
+    // plan, not a quarter) where a first step, unplanned, does not: on rusticl, whose
+    // loops end early and whose first step searches again from a finer front, that
+    // step peaks at 2.4 times.
+    for (std::size_t peak : peaks) CHECK(double(peak) <= 2.5 * double(held.back()));
     // The second step's segments, sized from what the first emitted rather than from
     // the items a front pair is expected to emit, hold what later steps hold (10-12% more
     // on pocl when they were not). Where the first step's own search took more (rusticl,
