@@ -581,7 +581,8 @@ struct Scheduler::State {
   std::uint64_t spill_pool_items(const EmitterState& e, std::size_t segments) const
   {
     const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
-    const std::uint64_t least = planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * context.work_group_size()) : 0;
+    const std::uint64_t least =
+        planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * context.work_group_size()) : 0;
     return std::max(least, 2 * spilled) + (segments - planned) * spill_per_group;
   }
 
@@ -880,8 +881,8 @@ struct Scheduler::State {
       scan.exclusive(e.counts, e.offsets, e.segments, counters, no_slot, tl(), p.spec->name.c_str());
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
                            cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
-                           cl_uint(e.overflow_slot), cl_uint(e.pool), dst.buffer, cl_uint(copy ? dst.capacity : 0), cl_uint(per_group),
-                           cl_uint(own_offsets));
+                           cl_uint(e.overflow_slot), cl_uint(e.pool), dst.buffer, cl_uint(copy ? dst.capacity : 0),
+                           cl_uint(per_group), cl_uint(own_offsets));
     const std::size_t groups = (e.segments + per_group - 1) / per_group;
     const std::size_t spill_groups = own_offsets ? 0 : (e.pool + wg - 1) / wg;
     context.launch(merge_planned, copy ? (groups + spill_groups) * wg : 1, wg, tl(), p.spec->name);
