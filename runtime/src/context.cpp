@@ -166,6 +166,15 @@ void Context::write(const Buffer& buffer, const void* data, std::size_t bytes, s
   if (timeline) timeline->record("upload", out_event(timeline, event));
 }
 
+Handle<cl_event> Context::write_queued(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset)
+{
+  if (bytes == 0) return {};
+  cl_event event = nullptr;
+  check_with(clEnqueueWriteBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, &event),
+             "clEnqueueWriteBuffer", [&] { return "queueing an upload of " + std::to_string(bytes) + " bytes"; });
+  return Handle<cl_event>(event);
+}
+
 void Context::copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset,
                    std::size_t destination_offset, Timeline* timeline)
 {

@@ -1692,15 +1692,32 @@ void Scheduler::download(StreamId stream, void* items, std::size_t count) const
   s.context.read(st.buffer, items, count * s.spec(stream).element_bytes);
 }
 
+namespace {
+
+void check_write(const StreamSpec& spec, std::size_t held, std::size_t first, std::size_t count)
+{
+  if (spec.variable || first + count > held)
+    throw Error("cannot write items [" + std::to_string(first) + ", " + std::to_string(first + count) +
+                ") of stream " + spec.name +
+                (spec.variable ? ", which is variable-length" : ", which holds " + std::to_string(held)));
+}
+
+}  // namespace
+
 void Scheduler::write(StreamId stream, std::size_t first, const void* items, std::size_t count)
 {
   auto& s = *state_;
   const auto& spec = s.spec(stream);
-  if (spec.variable || first + count > s.state(stream).count)
-    throw Error("cannot write items [" + std::to_string(first) + ", " + std::to_string(first + count) +
-                ") of stream " + spec.name + (spec.variable ? ", which is variable-length" : ", which holds " +
-                std::to_string(s.state(stream).count)));
+  check_write(spec, s.state(stream).count, first, count);
   s.context.write(s.state(stream).buffer, items, count * spec.element_bytes, first * spec.element_bytes);
+}
+
+Handle<cl_event> Scheduler::write_queued(StreamId stream, std::size_t first, const void* items, std::size_t count)
+{
+  auto& s = *state_;
+  const auto& spec = s.spec(stream);
+  check_write(spec, s.state(stream).count, first, count);
+  return s.context.write_queued(s.state(stream).buffer, items, count * spec.element_bytes, first * spec.element_bytes);
 }
 
 void Scheduler::copy(StreamId source, std::size_t source_first, StreamId destination, std::size_t destination_first,

@@ -1,6 +1,7 @@
 #include "contact_readback.hpp"
 #include "feature_ids.hpp"
 #include "front_control.hpp"
+#include "position_writes.hpp"
 #include "scene_upload.hpp"
 
 #include <cstreams/pipeline/ccd_graph.hpp>
@@ -114,6 +115,7 @@ struct Detector::State {
   FrontControl front;
   FeatureIds ids;
   ContactReadback readback;
+  PositionWrites given{context};  // set_positions() and set_step()'s
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
   ContactSpan contacts;  // in the readback's host memory
@@ -146,6 +148,16 @@ struct Detector::State {
     if (!failure.empty())
       throw Error("this detector cannot be used after its step failed on the device (" + failure +
                   "); create a new one");
+  }
+
+  // Stages one object's checked positions for a float stream and, in double precision,
+  // its exact twin; returns whether they are floats.
+  bool stage_positions(runtime::StreamId single, runtime::StreamId exact, std::uint32_t o, const std::vector<Vec3>& x)
+  {
+    const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex, n = x.size();
+    const bool floats = round_to_float(x, static_cast<float*>(given.stage(single, first, n, 3 * sizeof(float))));
+    if (has(exact)) std::memcpy(given.stage(exact, first, n, sizeof(Vec3)), x.data(), n * sizeof(Vec3));
+    return floats;
   }
 
   void upload_ahead(std::uint32_t o, const std::vector<Vec3>& x)
@@ -184,20 +196,31 @@ struct Detector::State {
     ahead.uploading = std::async(std::launch::async, [this, single, exact] {
       Ahead::Uploads uploads;
       uploads.floats.assign(ahead.ends.size(), false);
-      for (std::uint32_t o = 0; o < ahead.ends.size(); ++o) {
-        const std::vector<Vec3>* x = ahead.ends[o];
+      // The copies sit where the vertices go: objects given positions that are adjacent
+      // there go up in one write (a write costs the 300 bodies of a crowd more than
+      // their bytes).
+      const auto write = [&](std::size_t first, std::size_t end) {
+        const std::size_t vertex = 3 * sizeof(float), count = end - first;
+        uploads.events.push_back(context.write_ahead(single, static_cast<float*>(ahead.single.data()) + 3 * first,
+                                                     count * vertex, first * vertex, ahead.free));
+        if (exact)
+          uploads.events.push_back(context.write_ahead(exact, static_cast<Vec3*>(ahead.exact.data()) + first,
+                                                       count * sizeof(Vec3), first * sizeof(Vec3), ahead.free));
+      };
+      std::size_t run_first = 0, run_end = 0;
+      for (const ObjectSlot& slot : layout.slots) {
+        const std::vector<Vec3>* x = ahead.ends[slot.object];
         if (!x) continue;
-        const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex;
-        float* rounded = static_cast<float*>(ahead.single.data()) + 3 * first;
-        uploads.floats[o] = round_to_float(*x, rounded);
-        const std::size_t vertex = 3 * sizeof(float);
-        uploads.events.push_back(context.write_ahead(single, rounded, x->size() * vertex, first * vertex, ahead.free));
-        if (!exact) continue;
-        Vec3* copy = static_cast<Vec3*>(ahead.exact.data()) + first;
-        std::copy(x->begin(), x->end(), copy);
-        uploads.events.push_back(
-            context.write_ahead(exact, copy, x->size() * sizeof(Vec3), first * sizeof(Vec3), ahead.free));
+        const std::size_t first = slot.first_vertex;
+        uploads.floats[slot.object] = round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first);
+        if (exact) std::copy(x->begin(), x->end(), static_cast<Vec3*>(ahead.exact.data()) + first);
+        if (first != run_end) {
+          if (run_end > run_first) write(run_first, run_end);
+          run_first = first;
+        }
+        run_end = first + x->size();
       }
+      if (run_end > run_first) write(run_first, run_end);
       return uploads;
     });
   }
@@ -276,23 +299,19 @@ void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
 {
   State& s = *state_;
   s.check_usable();
-  const FloatPositions f = checked_positions(s.scene, object, end);
-  s.guarded([&] {
-    write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f, end);
-    s.end_exact[object] = f.exact;
-  });
+  check_positions(s.scene, object, end);
+  s.guarded([&] { s.end_exact[object] = s.stage_positions(s.streams.x1, s.streams.x1_double, object, end); });
 }
 
 void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
 {
   State& s = *state_;
   s.check_usable();
-  const FloatPositions f0 = checked_positions(s.scene, object, start), f1 = checked_positions(s.scene, object, end);
+  check_positions(s.scene, object, start);
+  check_positions(s.scene, object, end);
   s.guarded([&] {
-    write_positions(*s.scheduler, s.layout, s.streams.x0, s.streams.x0_double, object, f0, start);
-    write_positions(*s.scheduler, s.layout, s.streams.x1, s.streams.x1_double, object, f1, end);
-    s.start_exact[object] = f0.exact;
-    s.end_exact[object] = f1.exact;
+    s.start_exact[object] = s.stage_positions(s.streams.x0, s.streams.x0_double, object, start);
+    s.end_exact[object] = s.stage_positions(s.streams.x1, s.streams.x1_double, object, end);
   });
 }
 
@@ -318,6 +337,7 @@ void Detector::run_step(Report report)
   const auto started = std::chrono::steady_clock::now();
   const std::uint64_t launches = s.context.kernel_launches(), reads = s.context.blocking_reads();
   s.context.reset_memory_high_water();
+  s.given.queue(*s.scheduler);
   s.start_uploads_ahead();
   const CcdStreams& st = s.streams;
   if (has(st.object_contacts)) s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));

@@ -26,6 +26,16 @@ std::vector<std::array<std::int32_t, 2>> device_nodes(const SceneLayout& layout)
   return packed;
 }
 
+// Writes one object's positions to a float stream and, in double precision, its exact twin.
+void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
+                     runtime::StreamId exact, std::uint32_t o, const FloatPositions& rounded,
+                     const std::vector<Vec3>& x)
+{
+  const std::uint32_t first = layout.slots[layout.slot_of[o]].first_vertex;
+  scheduler.write(single, first, rounded.rounded.data(), x.size());
+  if (has(exact)) scheduler.write(exact, first, x.data(), x.size());
+}
+
 }  // namespace
 
 void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
@@ -42,21 +52,6 @@ void check_positions(const SceneDescription& scene, std::uint32_t o, const std::
   } catch (const InputError& e) {
     throw InputError("object '" + d.name + "': " + e.what());
   }
-}
-
-FloatPositions checked_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
-{
-  check_positions(scene, o, x);
-  return rounded_positions(x);
-}
-
-void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
-                     runtime::StreamId exact, std::uint32_t o, const FloatPositions& rounded,
-                     const std::vector<Vec3>& x)
-{
-  const std::uint32_t first = layout.slots[layout.slot_of[o]].first_vertex;
-  scheduler.write(single, first, rounded.rounded.data(), x.size());
-  if (has(exact)) scheduler.write(exact, first, x.data(), x.size());
 }
 
 std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const SceneLayout& layout,

@@ -19,13 +19,7 @@ std::vector<bool> upload_scene(runtime::Scheduler& scheduler, const CcdGraph& gr
                                const SceneDescription& scene, double min_separation);
 
 // The checks a moving object's positions from a caller must pass (an InputError naming
-// the object), and the positions after them, rounded to float.
+// the object).
 void check_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
-FloatPositions checked_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
-
-// Writes one object's positions to a float stream and, in double precision, its exact twin.
-void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, runtime::StreamId single,
-                     runtime::StreamId exact, std::uint32_t object, const FloatPositions& rounded,
-                     const std::vector<Vec3>& x);
 
 }  // namespace cstreams

@@ -74,6 +74,9 @@ public:
 
   void write(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset = 0,
              Timeline* timeline = nullptr);
+  // A write queued behind the work on queue() that returns at once: it reads `data`
+  // until its event, returned, completes.
+  Handle<cl_event> write_queued(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset);
   void read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
             Timeline* timeline = nullptr);
   void copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset = 0,

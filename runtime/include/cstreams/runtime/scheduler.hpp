@@ -117,6 +117,8 @@ public:
   // Fixed streams only: items [first, first + count) without resizing, and a copy of
   // items between two streams of one element size (queued on the device).
   void write(StreamId stream, std::size_t first, const void* items, std::size_t count);
+  // As write(), queued: returns at once and reads `items` until the event completes.
+  Handle<cl_event> write_queued(StreamId stream, std::size_t first, const void* items, std::size_t count);
   void copy(StreamId source, std::size_t source_first, StreamId destination, std::size_t destination_first,
             std::size_t count);
 

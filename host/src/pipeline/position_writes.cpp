@@ -1,0 +1,40 @@
+#include "position_writes.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+namespace cstreams {
+
+void* PositionWrites::stage(runtime::StreamId stream, std::size_t first, std::size_t count, std::size_t item_bytes)
+{
+  // Long done: the step that read them has returned its results.
+  context_.block_until(queued_);
+  queued_.clear();
+  auto s = std::find_if(staged_.begin(), staged_.end(), [&](const Staged& x) { return x.stream == stream; });
+  if (s == staged_.end()) s = staged_.insert(staged_.end(), Staged{stream, item_bytes, 0, {}, {}});
+  const std::size_t bytes = count * item_bytes, offset = s->used;
+  if (offset + bytes > s->memory.bytes()) {
+    runtime::HostStaging grown(context_, std::max(offset + bytes, 2 * s->memory.bytes()), "positions given");
+    if (offset) std::memcpy(grown.data(), s->memory.data(), offset);
+    s->memory = std::move(grown);
+  }
+  s->used += bytes;
+  if (!s->runs.empty() && s->runs.back().first + s->runs.back().count == first)
+    s->runs.back().count += count;
+  else
+    s->runs.push_back(Run{first, count, offset});
+  return static_cast<char*>(s->memory.data()) + offset;
+}
+
+void PositionWrites::queue(runtime::Scheduler& scheduler)
+{
+  for (Staged& s : staged_) {
+    for (const Run& r : s.runs)
+      queued_.push_back(
+          scheduler.write_queued(s.stream, r.first, static_cast<const char*>(s.memory.data()) + r.offset, r.count));
+    s.runs.clear();
+    s.used = 0;
+  }
+}
+
+}  // namespace cstreams
