@@ -1,3 +1,4 @@
+#include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/io/mesh_io.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/shapes.hpp>
@@ -134,5 +135,31 @@ TEST_CASE("float-box candidates contain the exact-box candidates", "[host][bvh][
       CHECK(includes(f.blocks[i].ee, x.blocks[i].ee));
     }
     CHECK(f.vf_count() >= x.vf_count());
+  }
+}
+
+// The float positions the device reads, and whether they are the input itself (then
+// single precision takes them as exact): every coordinate rounded to nearest as a cast
+// rounds it, and one coordinate off a float, wherever it sits among the vector lanes or
+// the tail, makes the whole array inexact.
+TEST_CASE("positions round to the nearest floats, exact only where every coordinate is a float", "[host][bvh][quick]")
+{
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-1e3, 1e3);
+  for (std::size_t vertices : {0, 1, 2, 3, 5, 8}) {
+    std::vector<Vec3> floats(vertices);
+    for (auto& p : floats)
+      for (int k = 0; k < 3; ++k) p[k] = double(float(coordinate(random)));
+    std::vector<float> out(3 * vertices, -1.0f);
+    CHECK(round_to_float(floats, out.data()));
+    for (std::size_t j = 0; j < out.size(); ++j) CHECK(double(out[j]) == floats[j / 3][int(j % 3)]);
+    for (std::size_t j = 0; j < 3 * vertices; ++j) {
+      INFO(vertices << " vertices, coordinate " << j);
+      std::vector<Vec3> one_off = floats;
+      double& c = one_off[j / 3][int(j % 3)];
+      c = std::nextafter(c, 2e3);
+      CHECK_FALSE(round_to_float(one_off, out.data()));
+      CHECK(out[j] == float(c));
+    }
   }
 }
