@@ -1,3 +1,4 @@
+#include <cstreams/errors.hpp>
 #include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/io/mesh_io.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
@@ -6,6 +7,9 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <limits>
 #include <random>
 #include <unistd.h>
 
@@ -138,11 +142,12 @@ TEST_CASE("float-box candidates contain the exact-box candidates", "[host][bvh][
   }
 }
 
-// The float positions the device reads, and whether they are the input itself (then
-// single precision takes them as exact): every coordinate rounded to nearest as a cast
-// rounds it, and one coordinate off a float, wherever it sits among the vector lanes or
-// the tail, makes the whole array inexact.
-TEST_CASE("positions round to the nearest floats, exact only where every coordinate is a float", "[host][bvh][quick]")
+// The float positions the device reads, whether they are the input itself (then single
+// precision takes them as exact) and whether each is a finite float (else the input is
+// refused): every coordinate rounded to nearest as a cast rounds it, and one coordinate
+// off a float or out of range, wherever it sits among the vector lanes or the tail,
+// tells for the whole array, as the check that names it does.
+TEST_CASE("positions round to the nearest floats, exact only where every coordinate is one, finite where each is", "[host][bvh][quick]")
 {
   std::mt19937 random(7);
   std::uniform_real_distribution<double> coordinate(-1e3, 1e3);
@@ -151,15 +156,27 @@ TEST_CASE("positions round to the nearest floats, exact only where every coordin
     for (auto& p : floats)
       for (int k = 0; k < 3; ++k) p[k] = double(float(coordinate(random)));
     std::vector<float> out(3 * vertices, -1.0f);
-    CHECK(round_to_float(floats, out.data()));
+    const FloatRounding exact = round_to_float(floats, out.data());
+    CHECK(exact.finite);
+    CHECK(exact.exact);
     for (std::size_t j = 0; j < out.size(); ++j) CHECK(double(out[j]) == floats[j / 3][int(j % 3)]);
     for (std::size_t j = 0; j < 3 * vertices; ++j) {
       INFO(vertices << " vertices, coordinate " << j);
       std::vector<Vec3> one_off = floats;
       double& c = one_off[j / 3][int(j % 3)];
       c = std::nextafter(c, 2e3);
-      CHECK_FALSE(round_to_float(one_off, out.data()));
+      const FloatRounding off = round_to_float(one_off, out.data());
+      CHECK(off.finite);
+      CHECK_FALSE(off.exact);
       CHECK(out[j] == float(c));
+      for (double bad : {std::nan(""), -std::numeric_limits<double>::infinity(), 1e39, -double(FLT_MAX) * 1.0000001}) {
+        INFO("coordinate " << bad);
+        c = bad;
+        CHECK_FALSE(round_to_float(one_off, out.data()).finite);
+        CHECK_THROWS_AS(check_float_positions(one_off), InputError);
+      }
+      c = double(FLT_MAX);
+      CHECK(round_to_float(one_off, out.data()).finite);
     }
   }
 }

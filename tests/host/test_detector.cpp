@@ -750,10 +750,25 @@ TEST_CASE("bad input at the API is a clear error and the detector stays usable",
   auto fewer = step.x1[sheet];
   fewer.pop_back();
   CHECK_THROWS_WITH(detector.set_positions(sheet, fewer), Catch::Contains("vertices, not " + std::to_string(fewer.size())));
-  auto nan = step.x1[sheet];
+  // The step's start, where the cloth is not now, but for one coordinate.
+  auto nan = step.x0[sheet];
   nan[17].y() = std::nan("");
   CHECK_THROWS_AS(detector.set_step(sheet, step.x0[sheet], nan), InputError);
   CHECK_THROWS_WITH(detector.set_step(sheet, step.x0[sheet], nan), Catch::Contains("'cloth': vertex 17"));
+  CHECK_THROWS_WITH(detector.set_step(sheet, nan, step.x0[sheet]), Catch::Contains("'cloth': vertex 17"));
+  CHECK_THROWS_WITH(detector.set_positions(sheet, nan), Catch::Contains("'cloth': vertex 17"));
+  // Refused whole: the next step is the one a detector given none of them runs (the
+  // cloth stays where the last step left it, touching the sphere).
+  Detector clean(cstreams::test::device(), describe(cloth, 30));
+  run_step(clean, step);
+  clean.detect();
+  detector.detect();
+  REQUIRE(!clean.contacts().empty());
+  REQUIRE(detector.contacts().size() == clean.contacts().size());
+  for (std::size_t i = 0; i < clean.contacts().size(); ++i) {
+    CHECK(detector.contacts()[i].same_features(clean.contacts()[i]));
+    CHECK(detector.contacts()[i].toi == clean.contacts()[i].toi);
+  }
 
   run_step(detector, step);
   REQUIRE(detector.contacts().size() == before.size());

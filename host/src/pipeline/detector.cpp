@@ -150,14 +150,32 @@ struct Detector::State {
                   "); create a new one");
   }
 
-  // Stages one object's checked positions for a float stream and, in double precision,
-  // its exact twin; returns whether they are floats.
-  bool stage_positions(runtime::StreamId single, runtime::StreamId exact, std::uint32_t o, const std::vector<Vec3>& x)
+  // Stages one object's positions for a float stream and, in double precision, its
+  // exact twin, uncommitted (PositionWrites::commit), and checks its coordinates as it
+  // rounds them.
+  FloatRounding stage_positions(runtime::StreamId single, runtime::StreamId exact, std::uint32_t o,
+                                const std::vector<Vec3>& x)
   {
     const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex, n = x.size();
-    const bool floats = round_to_float(x, static_cast<float*>(given.stage(single, first, n, 3 * sizeof(float))));
-    if (has(exact)) std::memcpy(given.stage(exact, first, n, sizeof(Vec3)), x.data(), n * sizeof(Vec3));
-    return floats;
+    const FloatRounding r = round_to_float(x, static_cast<float*>(given.stage(single, first, n, 3 * sizeof(float))));
+    if (r.finite && has(exact)) std::memcpy(given.stage(exact, first, n, sizeof(Vec3)), x.data(), n * sizeof(Vec3));
+    return r;
+  }
+
+  // Positions given for the next step's ends: staged together, or (a coordinate that is
+  // not a finite float) none of them, and an InputError that names the coordinate.
+  void stage_ends(std::uint32_t o, const std::vector<Vec3>* start, const std::vector<Vec3>& end)
+  {
+    const FloatRounding r0 = start ? stage_positions(streams.x0, streams.x0_double, o, *start) : FloatRounding{};
+    const FloatRounding r1 = stage_positions(streams.x1, streams.x1_double, o, end);
+    if (!r0.finite || !r1.finite) {
+      given.discard();
+      if (start) check_positions(scene, o, *start);
+      check_positions(scene, o, end);
+    }
+    given.commit();
+    if (start) start_exact[o] = r0.exact;
+    end_exact[o] = r1.exact;
   }
 
   void upload_ahead(std::uint32_t o, const std::vector<Vec3>& x)
@@ -212,7 +230,7 @@ struct Detector::State {
         const std::vector<Vec3>* x = ahead.ends[slot.object];
         if (!x) continue;
         const std::size_t first = slot.first_vertex;
-        uploads.floats[slot.object] = round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first);
+        uploads.floats[slot.object] = round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first).exact;
         if (exact) std::copy(x->begin(), x->end(), static_cast<Vec3*>(ahead.exact.data()) + first);
         if (first != run_end) {
           if (run_end > run_first) write(run_first, run_end);
@@ -299,20 +317,17 @@ void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
 {
   State& s = *state_;
   s.check_usable();
-  check_positions(s.scene, object, end);
-  s.guarded([&] { s.end_exact[object] = s.stage_positions(s.streams.x1, s.streams.x1_double, object, end); });
+  check_moving_object(s.scene, object, end);
+  s.guarded([&] { s.stage_ends(object, nullptr, end); });
 }
 
 void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
 {
   State& s = *state_;
   s.check_usable();
-  check_positions(s.scene, object, start);
-  check_positions(s.scene, object, end);
-  s.guarded([&] {
-    s.start_exact[object] = s.stage_positions(s.streams.x0, s.streams.x0_double, object, start);
-    s.end_exact[object] = s.stage_positions(s.streams.x1, s.streams.x1_double, object, end);
-  });
+  check_moving_object(s.scene, object, start);
+  check_moving_object(s.scene, object, end);
+  s.guarded([&] { s.stage_ends(object, &start, end); });
 }
 
 void Detector::upload_ahead(std::uint32_t object, const std::vector<Vec3>& end)

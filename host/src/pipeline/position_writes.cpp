@@ -19,11 +19,29 @@ void* PositionWrites::stage(runtime::StreamId stream, std::size_t first, std::si
     s->memory = std::move(grown);
   }
   s->used += bytes;
-  if (!s->runs.empty() && s->runs.back().first + s->runs.back().count == first)
-    s->runs.back().count += count;
-  else
-    s->runs.push_back(Run{first, count, offset});
+  uncommitted_.emplace_back(std::size_t(s - staged_.begin()), Run{first, count, offset});
   return static_cast<char*>(s->memory.data()) + offset;
+}
+
+void PositionWrites::commit()
+{
+  // A stream's staging grows in the order its runs come, so items adjacent in the
+  // stream are adjacent there too.
+  for (const auto& [s, run] : uncommitted_) {
+    std::vector<Run>& runs = staged_[s].runs;
+    if (!runs.empty() && runs.back().first + runs.back().count == run.first)
+      runs.back().count += run.count;
+    else
+      runs.push_back(run);
+  }
+  uncommitted_.clear();
+}
+
+void PositionWrites::discard()
+{
+  // Staged in order, so each stream's first uncommitted run starts what is dropped.
+  for (auto it = uncommitted_.rbegin(); it != uncommitted_.rend(); ++it) staged_[it->first].used = it->second.offset;
+  uncommitted_.clear();
 }
 
 void PositionWrites::queue(runtime::Scheduler& scheduler)

@@ -38,7 +38,7 @@ void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, r
 
 }  // namespace
 
-void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+void check_moving_object(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
 {
   if (o >= scene.objects.size())
     throw InputError("no object " + std::to_string(o) + " in a scene of " + std::to_string(scene.objects.size()));
@@ -47,10 +47,15 @@ void check_positions(const SceneDescription& scene, std::uint32_t o, const std::
   if (x.size() != d.positions.size())
     throw InputError("object '" + d.name + "' has " + std::to_string(d.positions.size()) + " vertices, not " +
                      std::to_string(x.size()));
+}
+
+void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+{
+  check_moving_object(scene, o, x);
   try {
     check_float_positions(x);
   } catch (const InputError& e) {
-    throw InputError("object '" + d.name + "': " + e.what());
+    throw InputError("object '" + scene.objects[o].name + "': " + e.what());
   }
 }
 

@@ -37,9 +37,15 @@ struct FloatPositions {
 // Rounds positions to float (an InputError for a non-finite or out-of-range one).
 std::vector<float> to_float_positions(const std::vector<Vec3>& x);
 // The halves of that: the check, and the rounding to nearest, into a new array or into
-// `out` (3 floats a vertex; returns FloatPositions::exact).
+// `out` (3 floats a vertex).
 void check_float_positions(const std::vector<Vec3>& x);
 FloatPositions rounded_positions(const std::vector<Vec3>& x);
-bool round_to_float(const std::vector<Vec3>& x, float* out);
+// Rounding into `out` checks as it goes, in the same pass: whether every coordinate is
+// a finite float (else `out` is of no use, and check_float_positions() names the first
+// that is not) and whether the floats are the input itself (FloatPositions::exact).
+struct FloatRounding {
+  bool finite = true, exact = true;
+};
+FloatRounding round_to_float(const std::vector<Vec3>& x, float* out);
 
 }  // namespace cstreams
