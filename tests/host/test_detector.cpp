@@ -36,6 +36,16 @@ void run_step(Detector& detector, const Step& step)
   detector.detect();
 }
 
+// The same contacts, feature by feature and time by time.
+void check_same_contacts(const ContactSpan& a, const ContactSpan& b)
+{
+  REQUIRE(a.size() == b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    CHECK(a[i].same_features(b[i]));
+    CHECK(a[i].toi == b[i].toi);
+  }
+}
+
 void check_candidates(const Scene& scene, std::size_t frame, const DetectorOptions& options)
 {
   INFO("scene " << scene.name << ", frame " << frame << ", front " << to_string(options.front) << ", "
@@ -764,11 +774,7 @@ TEST_CASE("bad input at the API is a clear error and the detector stays usable",
   clean.detect();
   detector.detect();
   REQUIRE(!clean.contacts().empty());
-  REQUIRE(detector.contacts().size() == clean.contacts().size());
-  for (std::size_t i = 0; i < clean.contacts().size(); ++i) {
-    CHECK(detector.contacts()[i].same_features(clean.contacts()[i]));
-    CHECK(detector.contacts()[i].toi == clean.contacts()[i].toi);
-  }
+  check_same_contacts(detector.contacts(), clean.contacts());
 
   run_step(detector, step);
   REQUIRE(detector.contacts().size() == before.size());
@@ -796,11 +802,7 @@ TEST_CASE("contacts do not depend on the work-group size a device runs", "[detec
     Detector a(cstreams::test::device(), describe(scene, 0), options), b(small, describe(scene, 0), options);
     run_step(a, step);
     run_step(b, step);
-    REQUIRE(a.contacts().size() == b.contacts().size());
-    for (std::size_t i = 0; i < a.contacts().size(); ++i) {
-      CHECK(a.contacts()[i].same_features(b.contacts()[i]));
-      CHECK(a.contacts()[i].toi == b.contacts()[i].toi);
-    }
+    check_same_contacts(a.contacts(), b.contacts());
   }
 }
 
@@ -932,13 +934,8 @@ TEST_CASE("positions uploaded ahead give the contacts of positions set before ea
       }
       set.detect();
       ahead.detect();
-      const ContactSpan a = set.contacts(), b = ahead.contacts();
-      REQUIRE(a.size() == b.size());
-      for (std::size_t i = 0; i < a.size(); ++i) {
-        CHECK(a[i].same_features(b[i]));
-        CHECK(a[i].toi == b[i].toi);
-      }
-      contacts += a.size();
+      check_same_contacts(set.contacts(), ahead.contacts());
+      contacts += set.contacts().size();
     }
     CHECK(contacts > 0);
   }
@@ -972,13 +969,8 @@ TEST_CASE("positions given in any order, some twice, give the contacts of positi
     }
     in_order.detect();
     scrambled.detect();
-    const ContactSpan a = in_order.contacts(), b = scrambled.contacts();
-    REQUIRE(a.size() == b.size());
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      CHECK(a[i].same_features(b[i]));
-      CHECK(a[i].toi == b[i].toi);
-    }
-    contacts += a.size();
+    check_same_contacts(in_order.contacts(), scrambled.contacts());
+    contacts += in_order.contacts().size();
   }
   CHECK(contacts > 0);
 }

@@ -170,6 +170,7 @@ struct Detector::State {
     const FloatRounding r1 = stage_positions(streams.x1, streams.x1_double, o, end);
     if (!r0.finite || !r1.finite) {
       given.discard();
+      // The rounding's own test, which names the vertex: one of them throws.
       if (start) check_positions(scene, o, *start);
       check_positions(scene, o, end);
     }

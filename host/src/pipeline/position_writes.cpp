@@ -11,7 +11,7 @@ void* PositionWrites::stage(runtime::StreamId stream, std::size_t first, std::si
   context_.block_until(queued_);
   queued_.clear();
   auto s = std::find_if(staged_.begin(), staged_.end(), [&](const Staged& x) { return x.stream == stream; });
-  if (s == staged_.end()) s = staged_.insert(staged_.end(), Staged{stream, item_bytes, 0, {}, {}});
+  if (s == staged_.end()) s = staged_.insert(staged_.end(), Staged{stream, 0, {}, {}});
   const std::size_t bytes = count * item_bytes, offset = s->used;
   if (offset + bytes > s->memory.bytes()) {
     runtime::HostStaging grown(context_, std::max(offset + bytes, 2 * s->memory.bytes()), "positions given");

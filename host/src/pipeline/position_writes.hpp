@@ -33,7 +33,7 @@ private:
   };
   struct Staged {
     runtime::StreamId stream;
-    std::size_t item_bytes = 0, used = 0;
+    std::size_t used = 0;  // bytes
     runtime::HostStaging memory;
     std::vector<Run> runs;
   };
