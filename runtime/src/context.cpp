@@ -352,7 +352,7 @@ std::vector<Timeline::Entry> Timeline::resolve() const
                "clGetEventProfilingInfo", describe);
     check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr),
                "clGetEventProfilingInfo", describe);
-    entries.push_back({p.label, end > start ? end - start : 0});
+    entries.push_back({p.label, end > start ? end - start : 0, start, end});
   }
   return entries;
 }

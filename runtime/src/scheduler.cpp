@@ -1559,7 +1559,10 @@ struct Scheduler::State {
   void collect_stats()
   {
     std::map<std::string, std::uint64_t> by_label;
-    for (const auto& e : timeline.resolve()) by_label[e.label] += e.nanoseconds;
+    for (const auto& e : timeline.resolve()) {
+      by_label[e.label] += e.nanoseconds;
+      stats.span.add(e.start, e.end);
+    }
     std::uint64_t pass_total = 0;
     // Segments are shared between stages: the run's total counts each buffer once, and
     // once the run is over they are all idle.

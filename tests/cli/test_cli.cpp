@@ -181,6 +181,22 @@ TEST_CASE("run --no-profile reports the same contacts, its wall time and no devi
   CHECK(report["median_device_ms"].is_null());
   CHECK(report["median_host_ms"].get<double>() > 0);
   CHECK(report["steps"][0]["passes"]["front update"]["ms"].is_null());
+  CHECK(report["steps"][0]["device_span_ms"].is_null());
+}
+
+// The device's span of a step holds its passes one after another (one in-order queue)
+// and the idle time between them: no shorter than their sum, and within the step's
+// wall time.
+TEST_CASE("run --json gives each step's device span around its passes' time", "[cli][quick]")
+{
+  const fs::path dir = fresh_dir("cstreams-cli-span");
+  execute({"run", funnel_frame("227.ply"), funnel_frame("228.ply"), "--repeat", "3", "--json",
+           (dir / "run.json").string()});
+  const auto step = nlohmann::json::parse(std::ifstream(dir / "run.json"))["steps"][0];
+  const double device = step["device_ms"].get<double>(), span = step["device_span_ms"].get<double>();
+  CHECK(device > 0);
+  CHECK(span >= device);
+  CHECK(span <= step["host_ms"].get<double>());
 }
 
 TEST_CASE("run --earliest-only gives the earliest time without reading or sorting the contacts", "[cli][quick]")

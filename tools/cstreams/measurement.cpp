@@ -39,6 +39,7 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
   return {{"frame", frame},
           {"host_ms", host_ms},
           {"device_ms", s.device_ns() * 1e-6},
+          {"device_span_ms", timed ? nlohmann::json(s.device_span_ns * 1e-6) : nlohmann::json()},
           {"launches", s.launches},
           {"blocking_reads", s.blocking_reads},
           {"triangle_pairs", s.triangle_pairs},
@@ -163,7 +164,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     const Step step = next ? std::move(*next) : load_step(scene, frame);
     next.reset();
     if (ahead && frame + 1 < last) next = load_step(scene, frame + 1);
-    std::vector<double> host, device, uploads_and_step;
+    std::vector<double> host, device, span, uploads_and_step;
     DetectorStats stats;
     for (unsigned r = 0; r < o.repeat; ++r) {
       const auto started = std::chrono::steady_clock::now();
@@ -185,6 +186,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
         host.push_back(stats.host_ms);
         uploads_and_step.push_back(wall);
         device.push_back(timed ? stats.device_ns() * 1e-6 : unknown);
+        span.push_back(timed ? stats.device_span_ns * 1e-6 : unknown);
         for (const auto& p : stats.run.passes) m.pass_ms[p.name].push_back(timed ? p.device_ns * 1e-6 : unknown);
       }
     }
@@ -197,6 +199,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     m.steps.push_back(step_json(frame, stats, host_ms, timed));
     m.steps.back()["step_ms"] = m.step_ms.back();
     m.steps.back()["device_ms"] = device_ms;
+    if (timed) m.steps.back()["device_span_ms"] = median(span);
     m.contact_count += stats.contacts;
     std::vector<double> earliest;
     if (o.earliest_only) {

@@ -100,6 +100,10 @@ struct DetectorStats {
   unsigned launches = 0;            // kernel launches of the last detect(), every one
   unsigned blocking_reads = 0;      // and its blocking reads (counters, flags, contacts)
   std::uint64_t device_ns() const;  // sum of the passes' device time
+  // With profiling on, from the start of the last run's first command on the device to
+  // the end of its last (the contacts' read): the passes, the counter clears and reads,
+  // and the device's idle time between them, waiting on the host.
+  std::uint64_t device_span_ns = 0;
   std::size_t device_bytes() const; // streams and scratch held after the step
   // The most the device context held during the step, passing scratch included (and
   // whatever else the context holds: other detectors on it, say).

@@ -369,12 +369,14 @@ void Detector::run_step(Report report)
 
   DetectorStats& stats = s.stats;
   stats.run = q.stats();
+  runtime::DeviceSpan span = stats.run.span;
   if (report == Report::contacts) {
     runtime::PassStats readback;
-    s.contacts = s.readback.read(q, st, s.options.profile, readback);
+    s.contacts = s.readback.read(q, st, s.options.profile, readback, span);
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
   }
+  stats.device_span_ns = span.nanoseconds();
   s.take_uploads_ahead();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();

@@ -2,6 +2,7 @@
 #include <cstreams/runtime/buffer.hpp>
 #include <cstreams/runtime/registration.hpp>
 #include <cstreams/runtime/stream_graph.hpp>
+#include <cstreams/runtime/timeline.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -53,6 +54,7 @@ struct RunStats {
   std::vector<PassStats> passes;    // in execution order
   std::vector<StreamStats> streams; // in declaration order
   std::uint64_t scheduler_ns = 0;   // counter clears and readbacks
+  DeviceSpan span;                  // of everything the run recorded (profiling on)
   unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
   std::size_t scratch_bytes = 0;    // segments (each buffer once), flags, offsets and scan levels
   std::size_t segment_bytes = 0;    // the registration segments alone, each buffer once

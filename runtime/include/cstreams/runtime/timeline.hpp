@@ -7,6 +7,19 @@
 
 namespace cstreams::runtime {
 
+// From the earliest start to the latest end of commands on one device: their time and
+// the device's idle time between them (launch latency, the host's round trips).
+struct DeviceSpan {
+  std::uint64_t start = UINT64_MAX, end = 0;  // none yet: an empty span
+  void add(std::uint64_t from, std::uint64_t to)
+  {
+    start = from < start ? from : start;
+    end = to > end ? to : end;
+  }
+  void add(const DeviceSpan& other) { add(other.start, other.end); }
+  std::uint64_t nanoseconds() const { return end > start ? end - start : 0; }
+};
+
 // Collects the profiling events of a run's launches and transfers, labelled by what
 // issued them, and turns them into device nanoseconds once the queue has finished.
 class Timeline {
@@ -14,6 +27,7 @@ public:
   struct Entry {
     std::string label;
     std::uint64_t nanoseconds = 0;
+    std::uint64_t start = 0, end = 0;  // on the device's clock
   };
 
   void record(std::string label, Handle<cl_event> event);
