@@ -193,6 +193,10 @@ TEST_CASE("run --json gives each step's device span around its passes' time", "[
   execute({"run", funnel_frame("227.ply"), funnel_frame("228.ply"), "--repeat", "3", "--json",
            (dir / "run.json").string()});
   const auto step = nlohmann::json::parse(std::ifstream(dir / "run.json"))["steps"][0];
+  if (step["device_ms"].is_null()) {  // a device without a kernel timer (rusticl on llvmpipe)
+    CHECK(step["device_span_ms"].is_null());
+    return;
+  }
   const double device = step["device_ms"].get<double>(), span = step["device_span_ms"].get<double>();
   CHECK(device > 0);
   CHECK(span >= device);
