@@ -147,7 +147,8 @@ TEST_CASE("float-box candidates contain the exact-box candidates", "[host][bvh][
 // refused): every coordinate rounded to nearest as a cast rounds it, and one coordinate
 // off a float or out of range, wherever it sits among the vector lanes or the tail,
 // tells for the whole array, as the check that names it does.
-TEST_CASE("positions round to the nearest floats, exact only where every coordinate is one, finite where each is", "[host][bvh][quick]")
+TEST_CASE("positions round to the nearest floats, exact only where every coordinate is one, finite where each is",
+          "[host][bvh][quick]")
 {
   std::mt19937 random(7);
   std::uniform_real_distribution<double> coordinate(-1e3, 1e3);

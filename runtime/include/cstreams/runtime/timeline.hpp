@@ -16,7 +16,6 @@ struct DeviceSpan {
     start = from < start ? from : start;
     end = to > end ? to : end;
   }
-  void add(const DeviceSpan& other) { add(other.start, other.end); }
   std::uint64_t nanoseconds() const { return end > start ? end - start : 0; }
 };
 
