@@ -1,11 +1,13 @@
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
 #include "step_arena.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <exception>
@@ -92,10 +94,36 @@ struct ListState {
   Buffer state;
   Buffer lists[2];  // ping-pong: round r reads lists[r % 2] and appends to the other
   Buffer counts;    // cl_kernels/runtime/worklist.h: counts[list_words]
+  // Host memory for the queued transfers of the counts, pinned: read into pageable
+  // memory, the queued read left an H200 idle longer rather than shorter. It holds what
+  // a seed's counts start from, written without blocking (the write reads them until
+  // `start_written` completes), then the counts read after the last batch.
+  HostStaging host;
+  std::uint32_t* start_counts() const { return static_cast<std::uint32_t*>(host.data()); }
+  std::uint32_t* counts_read() const { return start_counts() + list_words; }
+  Handle<cl_event> start_written;
   std::size_t capacity = 0;
   std::size_t released = 0;  // the capacity the lists had when memory pressure took them
-  unsigned rounds = 0;   // that the last run needed: the next run's first batch
-  bool settled = false;  // this run's rounds are done; a rerun of the pass only emits
+  // The rounds the last runs needed, the next run's first batch the most of them: a run
+  // that needs more than its first batch has its pass emit twice (refine()), and the
+  // rounds of steps in a row go up and down by one or two (300 bodies: 14-17), where an
+  // empty round costs a few microseconds. Past them, the batches start at two rounds.
+  std::array<unsigned, 8> recent_rounds{};
+  unsigned runs_settled = 0;
+  bool settled = false;  // this run's rounds are done, or their last batch is (awaiting)
+  // Where this run's rounds stand: the next batch, and whether they start from the seed.
+  bool reseed = true;
+  unsigned at_round = 0, batch = 0, next_batch = 0;
+  // Where `awaiting`, the read of the counts after the last batch is queued, and the
+  // stage's counter read, after it on the queue, brings them (refine()).
+  bool awaiting = false;
+  void restart()
+  {
+    settled = awaiting = false;
+    reseed = true;
+  }
+  // After a batch, as its counts say: its last round left nothing and none overflowed.
+  bool batch_finished() const { return counts_read()[3] <= capacity && counts_read()[at_round % 3] == 0; }
 };
 
 struct PassState {
@@ -676,6 +704,13 @@ struct Scheduler::State {
   // between which the host reads the counts once. A round that overflows the lists runs
   // again, as a replay (cl_kernels/runtime/worklist.h), once they have grown to what it
   // asked for with its input kept; a seed that overflows starts again.
+  // The read after a batch is queued rather than waited for, and the pass emits from
+  // the state as it stands: the stage's counter read then brings the counts too
+  // (flush, settle_list), which saves a round trip where the batch was the last; where
+  // it was not, the rounds go on from there and the pass emits again. On a device that
+  // ends loops early, each round goes over exactly its items, one a work-item, so that
+  // no work-item strides over many: the host waits for the counts after every round
+  // (such devices are CPUs, where a read costs little).
   void refine(PassState& p, std::size_t n)
   {
     const Worklist& w = *p.spec->worklist;
@@ -683,33 +718,37 @@ struct Scheduler::State {
     const std::string& label = p.spec->name;
     const std::size_t wg = context.work_group_size();
     const std::size_t round_group = w.round_group ? std::min(w.round_group, wg) : wg;
-    const std::size_t state_bytes = w.state_bytes + (w.extra_state_bytes > 0 && nonzero(w.extra_state_while) ? w.extra_state_bytes : 0);
-    const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
-    // A state far larger than this run's goes back too (keep_needed_lists).
-    if (l.state.bytes() > 2 * state_needed + kept_list_bytes) l.state = Buffer();
-    with_memory([&] { ensure_capacity(context, l.state, state_needed, "work list state"); });
-    if (n == 0) {
-      keep_needed_lists(l, 0, w.item_bytes);
-      return;
-    }
-    // Lists taken by memory pressure come back at their size, not at one that the rounds
-    // would overflow again.
-    if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes);
-    l.released = 0;
-    // A search deeper than this is a kernel that never settles, not work.
-    constexpr unsigned most_rounds = 1u << 20;
-    // On a device that ends loops early, each round goes over exactly its items, one a
-    // work-item, so that no work-item strides over many; the host reads the counts
-    // after every round (such devices are CPUs, where a read costs little).
     const bool bounded_loops = context.loop_trip_limit() != 0;
-    std::uint32_t counts[list_words];
-    unsigned round = 0, batch = 0, next_batch = 0;
-    for (bool seed = true;;) {
-      if (seed) {
-        seed = false;
-        context.fill_u32(l.counts, std::uint32_t(n), 0, 1, tl());
-        context.fill_u32(l.counts, 0, 1, list_words - 1, tl());
-        context.fill_u32(l.counts, 1, 9, 1, tl());
+    // The last batch's counts, brought by the stage's counter read: the rounds go on.
+    if (l.awaiting && settle_list(p)) return;
+    if (l.reseed) {
+      const std::size_t state_bytes =
+          w.state_bytes + (w.extra_state_bytes > 0 && nonzero(w.extra_state_while) ? w.extra_state_bytes : 0);
+      const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
+      // A state far larger than this run's goes back too (keep_needed_lists).
+      if (l.state.bytes() > 2 * state_needed + kept_list_bytes) l.state = Buffer();
+      with_memory([&] { ensure_capacity(context, l.state, state_needed, "work list state"); });
+      if (n == 0) {
+        keep_needed_lists(l, 0, w.item_bytes);
+        return;
+      }
+      // Lists taken by memory pressure come back at their size, not at one that the
+      // rounds would overflow again.
+      if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes);
+      l.released = 0;
+    }
+    std::uint32_t* const counts = l.counts_read();
+    do {
+      if (l.reseed) {
+        l.reseed = false;
+        // The seed's items, the loop canary's 1 (worklist.h) and zeros in one write:
+        // three fills took three commands of ~6 us each on the H100.
+        context.block_until({l.start_written});
+        std::uint32_t* start = l.start_counts();
+        std::fill(start, start + list_words, 0u);
+        start[0] = std::uint32_t(n);
+        start[9] = 1;
+        l.start_written = context.write_queued(l.counts, start, list_words * sizeof(std::uint32_t), 0);
         unsigned a = bind_own_args(*p.spec, l.seed);
         l.seed.set_arg(a++, l.state);
         l.seed.set_arg(a++, l.lists[0]);
@@ -717,67 +756,88 @@ struct Scheduler::State {
         l.seed.set_arg(a++, cl_uint(l.capacity));
         context.launch(l.seed, round_up(n, round_group), round_group, tl(), label);
         ++p.stats.launches;
-        counts[0] = std::uint32_t(n);
         // Rounds launched over exactly their items must know the seed's.
         if (bounded_loops) {
-          context.read(l.counts, counts, sizeof counts, 0, tl());
+          context.read(l.counts, counts, list_words * sizeof(std::uint32_t), 0, tl());
           ++stats.readbacks;
         }
-        round = 0;
-        batch = bounded_loops ? 1 : std::max(l.rounds, 1u);
-        next_batch = 8;
+        l.at_round = 0;
+        l.batch = bounded_loops ? 1 : std::max(*std::max_element(l.recent_rounds.begin(), l.recent_rounds.end()), 1u);
+        l.next_batch = l.runs_settled ? 2 : 8;
       }
-      for (;;) {
-        for (const unsigned last = round + batch; round < last; ++round) {
-          unsigned r = bind_own_args(*p.spec, l.round);
-          l.round.set_arg(r++, l.state);
-          l.round.set_arg(r++, l.lists[round % 2]);
-          l.round.set_arg(r++, l.lists[(round + 1) % 2]);
-          l.round.set_arg(r++, l.counts);
-          l.round.set_arg(r++, cl_uint(round));
-          l.round.set_arg(r++, cl_uint(l.capacity));
-          const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
-          context.launch(l.round, round_up(items, round_group), round_group, tl(), label);
-          ++p.stats.launches;
-        }
-        context.read(l.counts, counts, sizeof counts, 0, tl());
-        ++stats.readbacks;
-        if (counts[8])
-          throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
-                      std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
-        if (counts[3] > l.capacity || counts[round % 3] == 0) break;
-        if (round >= most_rounds)
-          throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[round % 3]) +
-                      " items after " + std::to_string(round) + " rounds");
-        if (!bounded_loops) {
-          batch = next_batch;
-          next_batch *= 2;
-        }
+      for (const unsigned last = l.at_round + l.batch; l.at_round < last; ++l.at_round) {
+        const unsigned round = l.at_round;
+        unsigned r = bind_own_args(*p.spec, l.round);
+        l.round.set_arg(r++, l.state);
+        l.round.set_arg(r++, l.lists[round % 2]);
+        l.round.set_arg(r++, l.lists[(round + 1) % 2]);
+        l.round.set_arg(r++, l.counts);
+        l.round.set_arg(r++, cl_uint(round));
+        l.round.set_arg(r++, cl_uint(l.capacity));
+        const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
+        context.launch(l.round, round_up(items, round_group), round_group, tl(), label);
+        ++p.stats.launches;
       }
-      if (counts[3] <= l.capacity) {
-        l.rounds = counts[7];
-        p.stats.rounds += counts[7];
-        p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
-        p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
-        keep_needed_lists(l, p.stats.widest_list, w.item_bytes);
+      if (!bounded_loops) {
+        context.read_queued(l.counts, counts, list_words * sizeof(std::uint32_t));
+        l.awaiting = true;
         return;
       }
-      ++p.stats.reruns;
-      const std::size_t needed = std::max(grown(counts[3]), 2 * l.capacity);
-      // Rounds after the one that overflowed did nothing; where no round ran, the seed's
-      // own first items overflowed.
-      if (counts[7] == 0) {
-        allocate_lists(l, needed, w.item_bytes);
-        seed = true;
-        continue;
+      context.read(l.counts, counts, list_words * sizeof(std::uint32_t), 0, tl());
+      ++stats.readbacks;
+    } while (!settle_list(p));
+  }
+
+  // Once the counts after a batch of rounds are read: whether the rounds are done, their
+  // statistics taken. Otherwise the next batch is planned, from a list grown where a
+  // round overflowed it (replayed) or from the seed where the seed did.
+  bool settle_list(PassState& p)
+  {
+    const Worklist& w = *p.spec->worklist;
+    ListState& l = *p.list;
+    const std::string& label = p.spec->name;
+    std::uint32_t* const counts = l.counts_read();
+    l.awaiting = false;
+    // A search deeper than this is a kernel that never settles, not work.
+    constexpr unsigned most_rounds = 1u << 20;
+    if (counts[8])
+      throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
+                  std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
+    if (counts[3] <= l.capacity && counts[l.at_round % 3] != 0) {
+      if (l.at_round >= most_rounds)
+        throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[l.at_round % 3]) +
+                    " items after " + std::to_string(l.at_round) + " rounds");
+      if (context.loop_trip_limit() == 0) {
+        l.batch = l.next_batch;
+        l.next_batch *= 2;
       }
-      round = counts[7] - 1;
-      grow_lists(l, needed, w.item_bytes, round % 2, counts[round % 3]);
-      counts[(round + 1) % 3] = counts[3] = counts[10] = 0;
-      counts[11] = round + 1;
-      for (const std::size_t word : {std::size_t((round + 1) % 3), std::size_t(3), std::size_t(10), std::size_t(11)})
-        context.fill_u32(l.counts, counts[word], word, 1, tl());
+      return false;
     }
+    if (counts[3] <= l.capacity) {
+      l.recent_rounds[l.runs_settled++ % l.recent_rounds.size()] = counts[7];
+      p.stats.rounds += counts[7];
+      p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
+      p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
+      keep_needed_lists(l, p.stats.widest_list, w.item_bytes);
+      l.reseed = true;
+      return true;
+    }
+    ++p.stats.reruns;
+    const std::size_t needed = std::max(grown(counts[3]), 2 * l.capacity);
+    // Rounds after the one that overflowed did nothing; where no round ran, the seed's
+    // own first items overflowed.
+    if (counts[7] == 0) {
+      allocate_lists(l, needed, w.item_bytes);
+      l.reseed = true;
+      return false;
+    }
+    const unsigned round = l.at_round = counts[7] - 1;
+    grow_lists(l, needed, w.item_bytes, round % 2, counts[round % 3]);
+    counts[(round + 1) % 3] = counts[3] = counts[10] = 0;
+    counts[11] = round + 1;
+    for (const std::size_t word : {std::size_t((round + 1) % 3), std::size_t(3), std::size_t(10), std::size_t(11)})
+      context.fill_u32(l.counts, counts[word], word, 1, tl());
+    return false;
   }
 
   void execute(PassState& p, Redo redo)
@@ -1062,6 +1122,7 @@ struct Scheduler::State {
   // segments or its stream.
   bool overflowed(const PassState& p)
   {
+    if (p.list && !p.list->settled) return true;
     for (const auto& e : p.emitters)
       if (segments_overflowed(p, e) || outgrew(p, e)) return true;
     if (!p.spec->culls()) return false;
@@ -1075,8 +1136,9 @@ struct Scheduler::State {
   {
     busy.assign(stage.begin(), stage.end());
     // Only variable-length outputs have counters to read.
-    if (std::none_of(stage.begin(), stage.end(),
-                     [](const PassState* p) { return !p->emitters.empty() || p->spec->culls(); }))
+    if (std::none_of(stage.begin(), stage.end(), [](const PassState* p) {
+          return !p->emitters.empty() || p->spec->culls() || (p->list && p->list->awaiting);
+        }))
       return;
     std::vector<PassState*> packed, overflowing;
     // Short of memory for a pass's output, where the stage's other passes are done or
@@ -1097,6 +1159,13 @@ struct Scheduler::State {
     for (;;) {
       context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
       ++stats.readbacks;
+      // Work lists whose last batch's counts came with the read: done, or their rounds go
+      // on (refine), and the pass emits again.
+      for (PassState* p : stage)
+        if (p->list && p->list->awaiting) {
+          if (p->list->batch_finished()) settle_list(*p);
+          else p->list->settled = false;
+        }
       // A pass whose outputs all fit is done: it packs its outputs that pack late now (its
       // segments stay busy until then), and its segments hold nothing needed any more,
       // so they may go back if growing another pass's output runs short of memory.
@@ -1138,7 +1207,12 @@ struct Scheduler::State {
         try {
           const bool atomic = p->mode == Registration::global_atomic;
           Redo r = std::find(unpacked.begin(), unpacked.end(), p) != unpacked.end() ? Redo::full : Redo::none;
+          // What a pass emitted from a work list's state before its rounds were done
+          // counts for nothing, its overflows included: it emits again once they are.
+          const bool resumes = p->list && !p->list->settled;
+          if (resumes) r = Redo::full;
           for (auto& e : p->emitters) {
+            if (resumes) break;
             auto& dst = state(e.stream);
             if (segments_overflowed(*p, e)) {
               // The rerun plans from this execution's counts, so every group fits.
@@ -1154,7 +1228,7 @@ struct Scheduler::State {
               r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
             }
           }
-          if (p->spec->culls()) {
+          if (p->spec->culls() && !resumes) {
             auto& dst = state(p->spec->cull_target);
             if (host_counters[dst.slot] > dst.capacity) {
               allocate_making_room([&] { with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); }); },
@@ -1164,7 +1238,7 @@ struct Scheduler::State {
           }
           if (r == Redo::full) clear_counters(*p);
           execute(*p, r);
-          ++p->stats.reruns;
+          if (!resumes) ++p->stats.reruns;
           if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
                                               [&](const EmitterState& e) { return packs_late(*p, e); }))
             busy.erase(std::find(busy.begin(), busy.end(), p));
@@ -1227,7 +1301,7 @@ struct Scheduler::State {
       p.atomic_this_run = false;
       p.handed_over = false;
       p.ran = false;
-      if (p.list) p.list->settled = false;
+      if (p.list) p.list->restart();
       for (auto& e : p.emitters) {
         e.segment_bytes = 0;
         e.exact_plan = false;
@@ -1524,7 +1598,7 @@ struct Scheduler::State {
       context.fill_u32(counters, 0, 0, host_counters.size(), tl());
       for (std::size_t j = first; j < passes.size(); ++j) {
         if (k > 0 && !every_slice[j]) continue;
-        if (passes[j].list) passes[j].list->settled = false;
+        if (passes[j].list) passes[j].list->restart();
         for (StreamId s : pass_outputs(*passes[j].spec))
           if (spec(s).variable) {
             state(s).known = false;
@@ -1637,6 +1711,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
       l.seed = s.build_kernel(spec, options.registration, w->seed);
       l.round = s.build_kernel(spec, options.registration, w->round);
       l.counts = Buffer(context, list_words * sizeof(std::uint32_t), "work list counts");
+      l.host = HostStaging(context, 2 * list_words * sizeof(std::uint32_t), "work list counts");
     }
     for (StreamId e : spec.emits) {
       EmitterState es;

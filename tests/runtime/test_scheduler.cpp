@@ -734,6 +734,47 @@ TEST_CASE("a work list runs its rounds on the device, grows when it overflows an
   }
 }
 
+// The counts after a batch of rounds come back with the stage's counters, so a run that
+// the last runs' rounds settle waits for one read; one that needs more rounds goes on
+// from where its batch ended, and the pass emits again from the settled state.
+TEST_CASE("a work list's counts come back with its stage's counters, and rounds beyond the last runs' go on",
+          "[runtime][scheduler][worklist][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 3001;
+  const std::vector<std::uint32_t> deep = random_values(n, 37);
+  std::vector<std::uint32_t> shallow;
+  for (std::uint32_t seed = 41; shallow.size() < n; ++seed)
+    for (const std::uint32_t value : random_values(n, seed))
+      if (tree_depth(value) < 4 && shallow.size() < n) shallow.push_back(value);
+  const auto rounds_of = [](const std::vector<std::uint32_t>& v) {
+    unsigned deepest = 0;
+    for (const std::uint32_t value : v) deepest = std::max(deepest, tree_depth(value) + 1);
+    return deepest;
+  };
+  REQUIRE(rounds_of(shallow) < rounds_of(deep));
+  StreamGraph g;
+  const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0);
+  Scheduler s(ctx, g);
+  s.set(tree_streams.deepest, cl_uint(0));
+  // After the deep trees, shallow ones take a first batch as long as the deep ones'
+  // (the most of the last runs'): their rounds end within it.
+  const std::vector<std::pair<const std::vector<std::uint32_t>*, bool>> runs = {
+      {&shallow, false}, {&shallow, true}, {&deep, false}, {&deep, true}, {&shallow, true}};
+  for (const auto& [v, within_first_batch] : runs) {
+    s.upload(tree_streams.values, *v);
+    s.run();
+    INFO((v == &deep ? "deep" : "shallow") << " trees" << (within_first_batch ? ", within the first batch" : ""));
+    CHECK(sorted(s.download<Pair>(tree_streams.counted)) == tree_counts(*v, false));
+    const PassStats& tree = s.stats().passes.at(0);
+    CHECK(tree.rounds == rounds_of(*v));
+    CHECK(tree.list_items == tree_items(*v));
+    if (ctx.loop_trip_limit() != 0) CHECK(s.stats().readbacks >= tree.rounds);
+    else if (within_first_batch) CHECK(s.stats().readbacks == 1);
+    else CHECK(s.stats().readbacks > 1);
+  }
+}
+
 // An optional mode's state (refine.cl's earliest box starts, kept only for steps that
 // report earliest times alone) costs nothing while the mode is off.
 TEST_CASE("a work list holds its extra state only while its parameter is set", "[runtime][scheduler][worklist][quick]")

@@ -79,6 +79,9 @@ public:
   Handle<cl_event> write_queued(const Buffer& buffer, const void* data, std::size_t bytes, std::size_t offset);
   void read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
             Timeline* timeline = nullptr);
+  // A read queued behind the work on queue() that returns at once: `data` holds the
+  // bytes once a blocking command queued after it has returned (the queue is in order).
+  void read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0);
   void copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset = 0,
             std::size_t destination_offset = 0, Timeline* timeline = nullptr);
   void fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,

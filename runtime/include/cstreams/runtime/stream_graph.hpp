@@ -64,7 +64,9 @@ template <class T> PassArg value_of(const T& v)
 //          ending with cs_worklist_check_loops(counts, round);
 //   then the pass's kernel over the inputs: __global S* state, then its emitters.
 // Rounds go in batches with no host round trip between them; the host reads the
-// counts once a batch. A round that overflows the list stops the rounds after it; the
+// counts once a batch. The pass's kernel runs behind the first batch before its counts
+// are known (they come back with the stage's counters); where the rounds were not done,
+// they go on and it runs again, so it must only read the state. A round that overflows the list stops the rounds after it; the
 // lists grow, keeping its input, and it runs again as a replay (cs_worklist_replay),
 // which must append the items it appended before and leave the state as one run of
 // the round would: updates that are not idempotent (a count) are skipped there. A seed
