@@ -66,12 +66,12 @@ template <class T> PassArg value_of(const T& v)
 // Rounds go in batches with no host round trip between them; the host reads the
 // counts once a batch. The pass's kernel runs behind the first batch before its counts
 // are known (they come back with the stage's counters); where the rounds were not done,
-// they go on and it runs again, so it must only read the state. A round that overflows the list stops the rounds after it; the
-// lists grow, keeping its input, and it runs again as a replay (cs_worklist_replay),
-// which must append the items it appended before and leave the state as one run of
-// the round would: updates that are not idempotent (a count) are skipped there. A seed
-// that overflows starts the work again. So no item is lost, and no round but the one
-// that overflowed runs twice.
+// they go on and it runs again, so it must only read the state. A round that overflows
+// the list stops the rounds after it; the lists grow, keeping its input, and it runs
+// again as a replay (cs_worklist_replay), which must append the items it appended
+// before and leave the state as one run of the round would: updates that are not
+// idempotent (a count) are skipped there. A seed that overflows starts the work again.
+// So no item is lost, and no round but the one that overflowed runs twice.
 struct Worklist {
   std::string seed, round;       // kernel names in the pass's program
   std::size_t item_bytes = 0;    // I
