@@ -106,7 +106,7 @@ struct ListState {
   std::size_t released = 0;  // the capacity the lists had when memory pressure took them
   // The rounds the last runs needed, the next run's first batch the most of them: a run
   // that needs more than its first batch has its pass emit twice (refine()), and the
-  // rounds of steps in a row go up and down by one or two (300 bodies: 14-17), where an
+  // rounds of steps in a row go up and down by one or two (300 bodies: 13-17), where an
   // empty round costs a few microseconds. Past them, the batches start at two rounds.
   std::array<unsigned, 8> recent_rounds{};
   unsigned runs_settled = 0;
