@@ -84,6 +84,7 @@ constexpr std::size_t most_merged_per_group = 64;
 
 // A work list's device side (Worklist in stream_graph.hpp).
 constexpr std::size_t list_words = 12;
+constexpr std::size_t list_count_bytes = list_words * sizeof(std::uint32_t);
 
 // Work lists and list states this small stay, however little a run needs: giving them
 // back would save nothing worth an allocation when the next run needs them again.
@@ -748,7 +749,7 @@ struct Scheduler::State {
         std::fill(start, start + list_words, 0u);
         start[0] = std::uint32_t(n);
         start[9] = 1;
-        l.start_written = context.write_queued(l.counts, start, list_words * sizeof(std::uint32_t), 0);
+        l.start_written = context.write_queued(l.counts, start, list_count_bytes, 0);
         unsigned a = bind_own_args(*p.spec, l.seed);
         l.seed.set_arg(a++, l.state);
         l.seed.set_arg(a++, l.lists[0]);
@@ -758,7 +759,7 @@ struct Scheduler::State {
         ++p.stats.launches;
         // Rounds launched over exactly their items must know the seed's.
         if (bounded_loops) {
-          context.read(l.counts, counts, list_words * sizeof(std::uint32_t), 0, tl());
+          context.read(l.counts, counts, list_count_bytes, 0, tl());
           ++stats.readbacks;
         }
         l.at_round = 0;
@@ -779,11 +780,11 @@ struct Scheduler::State {
         ++p.stats.launches;
       }
       if (!bounded_loops) {
-        context.read_queued(l.counts, counts, list_words * sizeof(std::uint32_t));
+        context.read_queued(l.counts, counts, list_count_bytes);
         l.awaiting = true;
         return;
       }
-      context.read(l.counts, counts, list_words * sizeof(std::uint32_t), 0, tl());
+      context.read(l.counts, counts, list_count_bytes, 0, tl());
       ++stats.readbacks;
     } while (!settle_list(p));
   }
@@ -803,7 +804,16 @@ struct Scheduler::State {
     if (counts[8])
       throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
                   std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
-    if (counts[3] <= l.capacity && counts[l.at_round % 3] != 0) {
+    if (l.batch_finished()) {
+      l.recent_rounds[l.runs_settled++ % l.recent_rounds.size()] = counts[7];
+      p.stats.rounds += counts[7];
+      p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
+      p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
+      keep_needed_lists(l, p.stats.widest_list, w.item_bytes);
+      l.reseed = true;
+      return true;
+    }
+    if (counts[3] <= l.capacity) {
       if (l.at_round >= most_rounds)
         throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[l.at_round % 3]) +
                     " items after " + std::to_string(l.at_round) + " rounds");
@@ -812,15 +822,6 @@ struct Scheduler::State {
         l.next_batch *= 2;
       }
       return false;
-    }
-    if (counts[3] <= l.capacity) {
-      l.recent_rounds[l.runs_settled++ % l.recent_rounds.size()] = counts[7];
-      p.stats.rounds += counts[7];
-      p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
-      p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
-      keep_needed_lists(l, p.stats.widest_list, w.item_bytes);
-      l.reseed = true;
-      return true;
     }
     ++p.stats.reruns;
     const std::size_t needed = std::max(grown(counts[3]), 2 * l.capacity);
@@ -1710,8 +1711,8 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
       auto& l = p.list.emplace();
       l.seed = s.build_kernel(spec, options.registration, w->seed);
       l.round = s.build_kernel(spec, options.registration, w->round);
-      l.counts = Buffer(context, list_words * sizeof(std::uint32_t), "work list counts");
-      l.host = HostStaging(context, 2 * list_words * sizeof(std::uint32_t), "work list counts");
+      l.counts = Buffer(context, list_count_bytes, "work list counts");
+      l.host = HostStaging(context, 2 * list_count_bytes, "work list counts");
     }
     for (StreamId e : spec.emits) {
       EmitterState es;
