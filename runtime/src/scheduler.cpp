@@ -284,6 +284,11 @@ struct Scheduler::State {
     context.write(st.buffer, waiting.data(), bytes);
   }
 
+  Registration registration_of(const PassSpec& spec) const
+  {
+    return spec.any_order ? Registration::global_atomic : options.registration;
+  }
+
   // Passes whose scratch may hold what is still needed: while a stage runs, its passes
   // and the pass being executed; once its counters are read, those that overflowed.
   std::vector<const PassState*> busy;
@@ -855,7 +860,7 @@ struct Scheduler::State {
     }
     if (redo == Redo::full) {
       // Once a run has fallen back it stays there: its reruns must not try segments again.
-      p.mode = p.atomic_this_run ? Registration::global_atomic : options.registration;
+      p.mode = p.atomic_this_run ? Registration::global_atomic : registration_of(*p.spec);
       // Outputs that memory pressure or a new run took come back at their size before
       // any segments are taken: the segments then fit beside them, or the pass registers
       // through the global counter (a handed-over output gets its buffer once packed).
@@ -1706,11 +1711,12 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     const PassSpec& spec = s.graph.passes()[index];
     PassState p;
     p.spec = &spec;
-    p.kernel = s.build_kernel(spec, options.registration);
+    const Registration registration = s.registration_of(spec);
+    p.kernel = s.build_kernel(spec, registration);
     if (const auto& w = spec.worklist) {
       auto& l = p.list.emplace();
-      l.seed = s.build_kernel(spec, options.registration, w->seed);
-      l.round = s.build_kernel(spec, options.registration, w->round);
+      l.seed = s.build_kernel(spec, registration, w->seed);
+      l.round = s.build_kernel(spec, registration, w->round);
       l.counts = Buffer(context, list_count_bytes, "work list counts");
       l.host = HostStaging(context, 2 * list_count_bytes, "work list counts");
     }

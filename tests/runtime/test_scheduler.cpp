@@ -225,6 +225,40 @@ TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][sche
   CHECK(s.download<Pair>(pairs) == std::vector<Pair>(all.begin(), all.begin() + std::ptrdiff_t(half)));
 }
 
+TEST_CASE("a pass that emits in any order registers through the global counter, losing no item and launching less",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const auto v = random_values(30011, 5);
+  const auto expected = cstreams::test::reference(v).pairs;
+  for (auto registration : {Registration::segmented_lock, Registration::lock_free})
+    for (std::size_t capacity : {std::size_t(1), std::size_t(1) << 17}) {
+      INFO("registration = " << to_string(registration) << ", capacity = " << capacity);
+      // Steady launches of a settled run of the expansion, with and without the order.
+      std::uint64_t launches[2];
+      for (const bool any_order : {false, true}) {
+        StreamGraph g;
+        const StreamId values = g.fixed("values", 4, v.size()), pairs = g.variable("pairs", 8, capacity);
+        auto& expand = g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs);
+        expand.arg(buffer_of(values)).arg(count_of(values));
+        if (any_order) expand.emits_in_any_order();
+        Scheduler s(ctx, g, {registration, true});
+        s.upload(values, v);
+        s.run();
+        CHECK(sorted(s.download<Pair>(pairs)) == sorted(expected));
+        const std::uint64_t before = ctx.kernel_launches();
+        s.run();
+        launches[any_order] = ctx.kernel_launches() - before;
+        CHECK(sorted(s.download<Pair>(pairs)) == sorted(expected));
+        CHECK(s.stats().passes.at(0).reruns == 0);
+        if (any_order) CHECK(s.stats().passes.at(0).segment_bytes == 0);
+      }
+      // The segments' scan and merge (lock-free: scan and interleaved merge) are gone.
+      CHECK(launches[1] < launches[0]);
+      CHECK(launches[1] == 1);
+    }
+}
+
 // One pass that expands values into pairs, through segmented locks. run(v) runs `v`,
 // checks every item and the merge's order by group, and returns the pass's reruns.
 struct SegmentedExpansion {

@@ -298,10 +298,16 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
   g.gather(vf);
   g.gather(ee);
+  // Contacts are read sorted (contacts.cl), by their minimum (earliest.cl) or by their
+  // query (narrow_phase.cpp), so their passes emit them in any order.
   const std::vector<std::pair<StreamId, ContactKind>> contacts = {{vf, ContactKind::vertex_face},
                                                                   {ee, ContactKind::edge_edge}};
   if (solver.solver == Solver::cubic) {
-    auto& test = g.pass("test candidates", {screen, "cs_cubic_pairs", options}).emit(vf).emit(ee).expect_items(0.25);
+    auto& test = g.pass("test candidates", {screen, "cs_cubic_pairs", options})
+                     .emit(vf)
+                     .emit(ee)
+                     .emits_in_any_order()
+                     .expect_items(0.25);
     over_streams(test, in.candidates, "the cubic solver");
     real(real(geometry_args(test, in, solver.precision), solver.tolerance), solver.min_separation)
         .arg(value_of(cl_uint(solver.filter)));
@@ -360,6 +366,7 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
                    .refine(boxes)
                    .emit(vf)
                    .emit(ee)
+                   .emits_in_any_order()
                    .expect_items(0.5);
   pass.arg(buffer_of(open)).arg(count_of(open));
   real(real(geometry_args(pass, in, solver.precision), solver.tolerance), solver.min_separation)

@@ -114,6 +114,7 @@ struct PassSpec {
   std::vector<std::pair<StreamId, double>> emit_expectations;  // what emit(s, per_work_item) set instead
   std::optional<Worklist> worklist;
   StreamId stop_flag;                 // a fixed output: a nonzero first word stops the run
+  bool any_order = false;             // emits_in_any_order()
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
   PassSpec& launch_over(std::vector<StreamId> streams)
@@ -157,6 +158,11 @@ struct PassSpec {
   // After the pass, the scheduler reads the first word of `flag` (a fixed stream the
   // pass writes) and throws RunStopped where it is not 0.
   PassSpec& stop_if(StreamId flag) { stop_flag = flag; return *this; }
+  // No reader depends on the order of what the pass emits (a sort or a minimum follows):
+  // it registers through each stream's global counter whatever the scheduler's
+  // registration, which spares the segments' scan and merge. The order then varies
+  // from run to run.
+  PassSpec& emits_in_any_order() { any_order = true; return *this; }
   bool culls() const { return cull_source.index != 0xffffffffu; }
   bool stops() const { return stop_flag.index != 0xffffffffu; }
 };
