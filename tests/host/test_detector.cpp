@@ -685,14 +685,14 @@ TEST_CASE("device contacts equal the solver's on the host's candidates, in both 
 
 // The sort's last pass on records made by hand, merged as one run (so in the order
 // given): the host reads its output as Contacts, so every field must land where
-// Contact keeps it, and a float time must widen to the very double the float is
-// (subnormals too, which the kernel widens bit by bit).
+// Contact keeps it, whatever bits the scene gives ids (fields that straddle words too),
+// and a float time must widen to the very double the float is (subnormals too, which
+// the kernel widens bit by bit).
 TEST_CASE("contacts come back laid out as the host's Contact, times widened exactly", "[detector][quick]")
 {
   runtime::Context& context = cstreams::test::device();
   context.programs().add_sources(ccd_kernel_sources());
-  const runtime::Kernel merge_last = context.programs().kernel("ccd/contacts.cl", "cs_contacts_merged");
-  constexpr cl_uint block = 8, record_words = 8;
+  constexpr cl_uint block = 8;
   const float floats[] = {0.0f,
                           std::numeric_limits<float>::denorm_min(),
                           3e-40f,
@@ -702,46 +702,70 @@ TEST_CASE("contacts come back laid out as the host's Contact, times widened exac
                           0.7f,
                           1.0f};
   const double doubles[] = {0.0, std::numeric_limits<double>::denorm_min(), 1e-310, 0.3, 1.0 - 1e-16, 1.0};
-  for (const bool double_time : {false, true}) {
-    INFO((double_time ? "double" : "single") << " times");
-    std::vector<double> times;
-    std::vector<std::uint32_t> records;
-    const std::size_t n = double_time ? std::size(doubles) : std::size(floats);
-    REQUIRE(n <= block);  // one block: one run, merged with nothing
-    for (std::size_t i = 0; i < n; ++i) {
-      std::uint32_t time_words[2] = {0, 0};
-      if (double_time) {
-        std::uint64_t bits;
-        std::memcpy(&bits, &doubles[i], sizeof bits);
-        time_words[0] = std::uint32_t(bits >> 32);
-        time_words[1] = std::uint32_t(bits);
-        times.push_back(doubles[i]);
-      } else {
-        std::memcpy(&time_words[0], &floats[i], sizeof(float));
-        times.push_back(double(floats[i]));
+  // (object bits, vertex bits): the widest ids, and fields that end mid-word.
+  for (const auto& [object_bits, vertex_bits] : {std::pair<cl_uint, cl_uint>{31, 32}, {3, 13}, {0, 7}})
+    for (const bool double_time : {false, true}) {
+      INFO((double_time ? "double" : "single") << " times, " << object_bits << " object bits, " << vertex_bits
+                                                << " vertex bits");
+      const cl_uint time_bits = double_time ? 64 : 32;
+      const cl_uint words = (1 + 2 * object_bits + 4 * vertex_bits + time_bits + 31) / 32;
+      const auto below = [](cl_uint bits, std::uint64_t x) { return bits == 0 ? 0 : x & ((std::uint64_t(1) << bits) - 1); };
+      std::vector<double> times;
+      std::vector<std::uint32_t> records;
+      std::vector<Contact> expected;
+      const std::size_t n = double_time ? std::size(doubles) : std::size(floats);
+      REQUIRE(n <= block);  // one block: one run, merged with nothing
+      for (std::size_t i = 0; i < n; ++i) {
+        Contact c;
+        c.kind = i % 2 ? ContactKind::edge_edge : ContactKind::vertex_face;
+        c.object_a = std::uint32_t(below(object_bits, 0x7fffffffu - i));
+        c.object_b = std::uint32_t(below(object_bits, 7 * i));
+        c.v = {std::uint32_t(below(vertex_bits, 11 + i)), std::uint32_t(below(vertex_bits, 4000000000u - i)),
+               std::uint32_t(below(vertex_bits, 13)), std::uint32_t(below(vertex_bits, 3000000000u + 5 * i))};
+        std::uint64_t time_field;
+        if (double_time) {
+          std::memcpy(&time_field, &doubles[i], sizeof time_field);
+          c.toi = doubles[i];
+        } else {
+          std::uint32_t bits;
+          std::memcpy(&bits, &floats[i], sizeof bits);
+          time_field = bits;
+          c.toi = double(floats[i]);
+        }
+        expected.push_back(c);
+        // Fields most significant first, bit by bit.
+        std::vector<std::uint32_t> record(words, 0);
+        std::size_t at = 0;
+        const auto put = [&](std::uint64_t value, cl_uint bits) {
+          for (cl_uint b = bits; b-- > 0; ++at)
+            if (value >> b & 1) record[at / 32] |= 0x80000000u >> (at % 32);
+        };
+        put(i % 2, 1);
+        put(c.object_a, object_bits);
+        put(c.object_b, object_bits);
+        for (const std::uint32_t v : c.v) put(v, vertex_bits);
+        put(time_field, time_bits);
+        records.insert(records.end(), record.begin(), record.end());
       }
-      const std::uint32_t kind = i % 2, object_a = 0x7fffffffu - std::uint32_t(i), object_b = 7 * std::uint32_t(i);
-      const std::uint32_t record[8] = {kind << 31 | object_a, object_b, 11, 12, 13, 4000000000u, time_words[0],
-                                       time_words[1]};
-      records.insert(records.end(), std::begin(record), std::end(record));
+      const runtime::Kernel merge_last = context.programs().kernel("ccd/contacts.cl", "cs_contacts_merged",
+                                                                   "-DCS_SORT_WORDS=" + std::to_string(words));
+      runtime::Buffer in(context, records.size() * sizeof(std::uint32_t), "records");
+      runtime::Buffer out(context, n * sizeof(Contact), "contacts");
+      context.write(in, records.data(), records.size() * sizeof(std::uint32_t));
+      merge_last.set_args(in, cl_uint(n), block, block, cl_uint(double_time), object_bits, vertex_bits, out);
+      merge_last.set_local(8, block * words * sizeof(cl_uint));
+      context.launch(merge_last, context.work_group_size(), context.work_group_size());
+      std::vector<Contact> got(n);
+      context.read(out, got.data(), n * sizeof(Contact));
+      for (std::size_t i = 0; i < n; ++i) {
+        INFO("contact " << i);
+        CHECK(got[i].kind == expected[i].kind);
+        CHECK(got[i].object_a == expected[i].object_a);
+        CHECK(got[i].object_b == expected[i].object_b);
+        CHECK(got[i].v == expected[i].v);
+        CHECK(got[i].toi == expected[i].toi);
+      }
     }
-    runtime::Buffer in(context, records.size() * sizeof(std::uint32_t), "records");
-    runtime::Buffer out(context, n * sizeof(Contact), "contacts");
-    context.write(in, records.data(), records.size() * sizeof(std::uint32_t));
-    merge_last.set_args(in, cl_uint(n), block, block, cl_uint(double_time), out);
-    merge_last.set_local(6, block * record_words * sizeof(cl_uint));
-    context.launch(merge_last, context.work_group_size(), context.work_group_size());
-    std::vector<Contact> got(n);
-    context.read(out, got.data(), n * sizeof(Contact));
-    for (std::size_t i = 0; i < n; ++i) {
-      INFO("contact " << i);
-      CHECK(got[i].kind == (i % 2 ? ContactKind::edge_edge : ContactKind::vertex_face));
-      CHECK(got[i].object_a == 0x7fffffffu - i);
-      CHECK(got[i].object_b == 7 * i);
-      CHECK(got[i].v == std::array<std::uint32_t, 4>{11, 12, 13, 4000000000u});
-      CHECK(got[i].toi == times[i]);
-    }
-  }
 }
 
 TEST_CASE("bad input at the API is a clear error and the detector stays usable", "[detector][quick]")

@@ -4,6 +4,7 @@
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -13,7 +14,13 @@ namespace cstreams {
 
 namespace {
 
-constexpr std::size_t record_words = 8;  // CS_SORT_WORDS of ccd/contacts.cl
+// Bits that hold every value below n.
+cl_uint bits_below(std::size_t n)
+{
+  cl_uint bits = 0;
+  while (bits < 64 && (std::uint64_t(1) << bits) < n) ++bits;
+  return bits;
+}
 
 // cs_store_contact writes Contacts word by word; the host reads them in place.
 static_assert(std::is_trivially_copyable_v<Contact> && std::is_standard_layout_v<Contact>);
@@ -23,13 +30,28 @@ static_assert(sizeof(ContactKind) == 1 && sizeof(Contact) == 40 && offsetof(Cont
 
 }  // namespace
 
+ContactRecord ContactRecord::of(const SceneDescription& scene, Precision precision)
+{
+  ContactRecord r;
+  std::size_t vertices = 0;
+  for (const auto& object : scene.objects) vertices = std::max(vertices, object.positions.size());
+  r.object_bits = bits_below(scene.objects.size());
+  r.vertex_bits = bits_below(vertices);
+  const std::size_t bits = 1 + 2 * r.object_bits + 4 * r.vertex_bits + (precision == Precision::double_ ? 64 : 32);
+  r.words = (bits + 31) / 32;
+  return r;
+}
+
+std::string ContactRecord::build_options() const { return "-DCS_SORT_WORDS=" + std::to_string(words); }
+
 ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& layout, const SceneDescription& scene,
                                  Precision precision)
     : context_(context),
       double_time_(precision == Precision::double_),
-      sort_blocks_(context.programs().kernel("ccd/contacts.cl", "cs_contact_sort_blocks")),
-      merge_last_(context.programs().kernel("ccd/contacts.cl", "cs_contacts_merged")),
-      sorter_(context, record_words)
+      record_(ContactRecord::of(scene, precision)),
+      sort_blocks_(context.programs().kernel("ccd/contacts.cl", "cs_contact_sort_blocks", record_.build_options())),
+      merge_last_(context.programs().kernel("ccd/contacts.cl", "cs_contacts_merged", record_.build_options())),
+      sorter_(context, record_.words)
 {
   std::vector<cl_uint> first_vertex(scene.objects.size());
   for (std::size_t o = 0; o < first_vertex.size(); ++o) first_vertex[o] = layout.slots[layout.slot_of[o]].first_vertex;
@@ -45,7 +67,7 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   std::size_t n = 0;
   for (const auto& found : streams.contacts) n += scheduler.count(found.first);
   if (n == 0) return {};
-  const std::size_t record_bytes = n * record_words * sizeof(cl_uint), sort_bytes = sorter_.scratch_bytes_for(n),
+  const std::size_t record_bytes = n * record_.words * sizeof(cl_uint), sort_bytes = sorter_.scratch_bytes_for(n),
                     contact_bytes = n * sizeof(Contact);
   // Lent by the step arena's free space between runs. Where it has none to lend, the
   // readback takes scratch of its own for this read alone: held from one step to the
@@ -73,6 +95,8 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
     sort_blocks_.set_arg(a++, vertex_face);
   });
   sort_blocks_.set_arg(a++, cl_uint(double_time_));
+  sort_blocks_.set_arg(a++, record_.object_bits);
+  sort_blocks_.set_arg(a++, record_.vertex_bits);
   sort_blocks_.set_arg(a++, scheduler.buffer(streams.faces));
   sort_blocks_.set_arg(a++, scheduler.buffer(streams.edges));
   sort_blocks_.set_arg(a++, scheduler.buffer(streams.vertex_object));
@@ -87,8 +111,8 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   if (const std::size_t passes = sorter_.merge_passes(n)) {
     const runtime::Buffer& runs = sorter_.merge(records, sort_scratch, n, passes - 1, events, stats.name.c_str());
     merge_last_.set_args(runs, cl_uint(n), cl_uint(sorter_.block() << (passes - 1)), cl_uint(sorter_.block()),
-                         cl_uint(double_time_), contacts);
-    merge_last_.set_local(6, sorter_.block_local_bytes());
+                         cl_uint(double_time_), record_.object_bits, record_.vertex_bits, contacts);
+    merge_last_.set_local(8, sorter_.block_local_bytes());
     context_.launch(merge_last_, groups * wg, wg, events, stats.name);
   }
   stats.launches = unsigned(context_.kernel_launches() - launches);

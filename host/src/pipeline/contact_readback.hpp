@@ -12,7 +12,17 @@
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
+#include <string>
+
 namespace cstreams {
+
+// How a contact's fields pack into a record of the sort (ccd/contacts.cl): each id in
+// the bits the scene's ids need, so that a record takes `words` words.
+struct ContactRecord {
+  cl_uint object_bits = 0, vertex_bits = 0, words = 0;
+  static ContactRecord of(const SceneDescription& scene, Precision precision);
+  std::string build_options() const;  // contacts.cl's, for records of `words` words
+};
 
 class ContactReadback {
 public:
@@ -32,6 +42,7 @@ public:
 private:
   runtime::Context& context_;
   bool double_time_;
+  ContactRecord record_;
   runtime::Kernel sort_blocks_;  // makes the records as it sorts them in blocks
   runtime::Kernel merge_last_;   // writes Contacts as it merges the last runs
   runtime::Sorter sorter_;
