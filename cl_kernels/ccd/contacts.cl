@@ -4,8 +4,8 @@
  *   kind (1 bit), object_a, object_b, v0, v1, v2, v3, the time's high word, its low word
  * with object-local vertex ids. Each field takes only the bits the scene's ids need
  * (object_bits for objects, vertex_bits for vertices: ContactReadback), so a record is
- * CS_SORT_WORDS words, not eight: cloth-ball's are four, and its sort took 0.18 ms on
- * the H100 with eight words and 0.11 with four. Times are never negative, so their bits
+ * CS_SORT_WORDS words, not eight: cloth-ball's are four, and its sort took 0.17 ms on
+ * the H100 with eight words and 0.13 with four. Times are never negative, so their bits
  * order as the times do; a single-precision time is its float's bits alone.
  *
  * The sort is the runtime's (runtime/sort.h), with its first and last launches here:
@@ -133,8 +133,9 @@ CS_DEFINE_STREAM_ITEM(uint4)
  * block and sorts them. Where one block holds them all they go out as Contacts, else
  * to `records` for the merge passes. */
 CS_GROUP_KERNEL void cs_contact_sort_blocks(CS_FOUR_STREAMS(uint4), const uint double_time,
-                                            const uint object_bits, const uint vertex_bits, __global const uint* faces, __global const uint2* edges,
-                                            __global const uint* vertex_object, __global const uint* first_vertex,
+                                            const uint object_bits, const uint vertex_bits, __global const uint* faces,
+                                            __global const uint2* edges, __global const uint* vertex_object,
+                                            __global const uint* first_vertex,
                                             const uint n, const uint block, __global cs_record* records,
                                             __global uint* contacts, __local uint* sorting)
 {

@@ -709,7 +709,9 @@ TEST_CASE("contacts come back laid out as the host's Contact, times widened exac
                                                 << " vertex bits");
       const cl_uint time_bits = double_time ? 64 : 32;
       const cl_uint words = (1 + 2 * object_bits + 4 * vertex_bits + time_bits + 31) / 32;
-      const auto below = [](cl_uint bits, std::uint64_t x) { return bits == 0 ? 0 : x & ((std::uint64_t(1) << bits) - 1); };
+      const auto below = [](cl_uint bits, std::uint64_t x) {
+        return bits == 0 ? 0 : x & ((std::uint64_t(1) << bits) - 1);
+      };
       std::vector<double> times;
       std::vector<std::uint32_t> records;
       std::vector<Contact> expected;
