@@ -215,31 +215,28 @@ struct Detector::State {
     ahead.uploading = std::async(std::launch::async, [this, single, exact] {
       Ahead::Uploads uploads;
       uploads.floats.assign(ahead.ends.size(), false);
-      // The copies sit where the vertices go: objects given positions that are adjacent
-      // there go up in one write (a write costs the 300 bodies of a crowd more than
-      // their bytes).
-      const auto write = [&](std::size_t first, std::size_t end) {
-        const std::size_t vertex = 3 * sizeof(float), count = end - first;
-        uploads.events.push_back(context.write_ahead(single, static_cast<float*>(ahead.single.data()) + 3 * first,
-                                                     count * vertex, first * vertex, ahead.free));
-        if (exact)
-          uploads.events.push_back(context.write_ahead(exact, static_cast<Vec3*>(ahead.exact.data()) + first,
-                                                       count * sizeof(Vec3), first * sizeof(Vec3), ahead.free));
+      // The copies sit where the vertices go, so runs of adjacent vertices there go up
+      // in one write each.
+      struct Run {
+        std::size_t first, count;
       };
-      std::size_t run_first = 0, run_end = 0;
+      std::vector<Run> runs;
       for (const ObjectSlot& slot : layout.slots) {
         const std::vector<Vec3>* x = ahead.ends[slot.object];
         if (!x) continue;
         const std::size_t first = slot.first_vertex;
         uploads.floats[slot.object] = round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first).exact;
         if (exact) std::copy(x->begin(), x->end(), static_cast<Vec3*>(ahead.exact.data()) + first);
-        if (first != run_end) {
-          if (run_end > run_first) write(run_first, run_end);
-          run_first = first;
-        }
-        run_end = first + x->size();
+        append_run(runs, Run{first, x->size()});
       }
-      if (run_end > run_first) write(run_first, run_end);
+      const std::size_t vertex = 3 * sizeof(float);
+      for (const Run& r : runs) {
+        uploads.events.push_back(context.write_ahead(single, static_cast<float*>(ahead.single.data()) + 3 * r.first,
+                                                     r.count * vertex, r.first * vertex, ahead.free));
+        if (exact)
+          uploads.events.push_back(context.write_ahead(exact, static_cast<Vec3*>(ahead.exact.data()) + r.first,
+                                                       r.count * sizeof(Vec3), r.first * sizeof(Vec3), ahead.free));
+      }
       return uploads;
     });
   }

@@ -26,14 +26,8 @@ void* PositionWrites::stage(runtime::StreamId stream, std::size_t first, std::si
 void PositionWrites::commit()
 {
   // A stream's staging grows in the order its runs come, so items adjacent in the
-  // stream are adjacent there too.
-  for (const auto& [s, run] : uncommitted_) {
-    std::vector<Run>& runs = staged_[s].runs;
-    if (!runs.empty() && runs.back().first + runs.back().count == run.first)
-      runs.back().count += run.count;
-    else
-      runs.push_back(run);
-  }
+  // stream are adjacent there too, and a joined run keeps its first part's offset.
+  for (const auto& [s, run] : uncommitted_) append_run(staged_[s].runs, run);
   uncommitted_.clear();
 }
 

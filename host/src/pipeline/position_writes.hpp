@@ -8,6 +8,17 @@
 
 namespace cstreams {
 
+// Appends items [run.first, run.first + run.count) of a stream, given in order, to
+// `runs`, joining the last run where they meet: adjacent objects go up in one write (a
+// write costs the 300 bodies of a crowd more than their bytes).
+template <class Run> void append_run(std::vector<Run>& runs, const Run& run)
+{
+  if (!runs.empty() && runs.back().first + runs.back().count == run.first)
+    runs.back().count += run.count;
+  else
+    runs.push_back(run);
+}
+
 // Positions that callers give object by object between steps, gathered in pinned host
 // memory and queued as the next step starts: one write per run of adjacent objects in
 // a stream, returning at once. With a blocking write per object and stream, a repeated
