@@ -712,7 +712,6 @@ TEST_CASE("contacts come back laid out as the host's Contact, times widened exac
       const auto below = [](cl_uint bits, std::uint64_t x) {
         return bits == 0 ? 0 : x & ((std::uint64_t(1) << bits) - 1);
       };
-      std::vector<double> times;
       std::vector<std::uint32_t> records;
       std::vector<Contact> expected;
       const std::size_t n = double_time ? std::size(doubles) : std::size(floats);
