@@ -112,4 +112,36 @@ inline void cs_dop_store(const float x[CS_DOP_FLOATS], __global float* box)
   for (int k = 0; k < CS_DOP_FLOATS / 2; ++k) ((__global float2*)box)[k] = (float2)(x[2 * k], x[2 * k + 1]);
 }
 
+/* Whether box x, already read, and box b are apart. On a GPU b is read whole before any
+ * slab is compared: loads that an early return could skip are issued one after another,
+ * each waiting for the one before (on the H200 the front update and the decomposition
+ * took a fifth longer so). On a CPU the early return wins (pocl: the front update 180 ->
+ * 130 ms on cloth-ball). */
+inline int cs_dop_apart(const float x[CS_DOP_FLOATS], __global const float* b)
+{
+#if CS_CPU
+  for (int k = 0; k < 9; ++k)
+    if (x[k] > b[9 + k] || b[k] > x[9 + k]) return 1;
+  return 0;
+#else
+  float y[CS_DOP_FLOATS];
+  cs_dop_load(b, y);
+  return cs_dops_apart(x, y);
+#endif
+}
+
+/* Whether boxes a and b overlap; on a CPU a's slabs are read only as far as needed. */
+inline int cs_dop_overlap(__global const float* a, __global const float* b)
+{
+#if CS_CPU
+  for (int k = 0; k < 9; ++k)
+    if (a[k] > b[9 + k] || b[k] > a[9 + k]) return 0;
+  return 1;
+#else
+  float x[CS_DOP_FLOATS];
+  cs_dop_load(a, x);
+  return !cs_dop_apart(x, b);
+#endif
+}
+
 #endif

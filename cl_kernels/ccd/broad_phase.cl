@@ -1,8 +1,8 @@
 /* Broad phase of a scene: BVTT front update over a forest of BVHs (one per object) to
- * non-adjacent triangle pairs, their decomposition into vertex-face and edge-edge
- * pairs by feature ownership, and the cull of feature pairs (and of the orphan pairs)
- * by their swept bounds. Boxes are 18 floats (bounds.h). Ids are global: every
- * object's vertices, edges, faces and nodes lie in one range of the scene's streams.
+ * non-adjacent triangle pairs, and their decomposition into vertex-face and edge-edge
+ * pairs by feature ownership, culled by their swept bounds (orphans.cl culls the
+ * orphan pairs). Boxes are 18 floats (bounds.h). Ids are global: every object's
+ * vertices, edges, faces and nodes lie in one range of the scene's streams.
  *
  * nodes: int2 (first child, or -1 - face for a leaf; parent and depth, bounds.h).
  * A BVTT node is a pair of tree nodes (i, j); i == j is a node against itself. A pair
@@ -45,38 +45,6 @@
 #define CS_FRONT_EMIT(p) (void)0
 #define CS_FRONT_END (void)0
 #endif
-
-/* Whether box x, already read, and box b are apart. On a GPU b is read whole before any
- * slab is compared: loads that an early return could skip are issued one after another,
- * each waiting for the one before (on the H200 the front update and the decomposition
- * took a fifth longer so). On a CPU the early return wins (pocl: the front update 180 ->
- * 130 ms on cloth-ball). */
-inline int cs_dop_apart(const float x[CS_DOP_FLOATS], __global const float* b)
-{
-#if CS_CPU
-  for (int k = 0; k < 9; ++k)
-    if (x[k] > b[9 + k] || b[k] > x[9 + k]) return 1;
-  return 0;
-#else
-  float y[CS_DOP_FLOATS];
-  cs_dop_load(b, y);
-  return cs_dops_apart(x, y);
-#endif
-}
-
-/* Whether boxes a and b overlap; on a CPU a's slabs are read only as far as needed. */
-inline int cs_dop_overlap(__global const float* a, __global const float* b)
-{
-#if CS_CPU
-  for (int k = 0; k < 9; ++k)
-    if (a[k] > b[9 + k] || b[k] > a[9 + k]) return 0;
-  return 1;
-#else
-  float x[CS_DOP_FLOATS];
-  cs_dop_load(a, x);
-  return !cs_dop_apart(x, b);
-#endif
-}
 
 inline int cs_faces_adjacent(__global const uint* faces, const uint f, const uint g)
 {
@@ -259,26 +227,4 @@ __kernel void cs_decompose(__global const uint2* pairs, const uint n, __global c
   }
   CS_EMITTER_END(vf);
   CS_EMITTER_END(ee);
-}
-
-/* Flags orphan edge-edge pairs whose boxes overlap. */
-__kernel void cs_cull_edge_pairs(__global const uint2* pairs, const uint n, __global const float* edge_boxes,
-                                 __global uint* keep)
-{
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  keep[i] = cs_dop_overlap(edge_boxes + CS_DOP_FLOATS * pairs[i].x, edge_boxes + CS_DOP_FLOATS * pairs[i].y);
-}
-
-/* Flags orphan vertex-face pairs whose boxes overlap; a face's box is its BVH leaf's. */
-__kernel void cs_cull_vertex_face_pairs(__global const uint2* pairs, const uint n, __global const float* x0,
-                                        __global const float* x1, const float separation,
-                                        __global const uint* face_words, __global const float* node_boxes,
-                                        __global uint* keep)
-{
-  const uint i = get_global_id(0);
-  if (i >= n) return;
-  float x[CS_DOP_FLOATS];
-  cs_vertex_dop(x0, x1, pairs[i].x, separation, x);
-  keep[i] = !cs_dop_apart(x, node_boxes + CS_DOP_FLOATS * cs_face_leaf(face_words[pairs[i].y]));
 }

@@ -326,6 +326,9 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   auto& test = g.pass(in_float ? "test candidates in float" : "test candidates",
                       {screen, "cs_screen_pairs", in_float ? solver_build_options(float_solver) : options})
                    .emit(open)
+                   // The refinement answers each query on its own, so it takes them
+                   // in any order.
+                   .emits_in_any_order()
                    .expect_items(0.5);
   over_streams(test, in.candidates, "the conservative screen");
   if (in_float) {
@@ -487,16 +490,18 @@ struct GraphBuilder {
     s.vf = g.variable("vf candidates", 8, guess);
     s.ee = g.variable("ee candidates", 8, guess);
     // The orphan pairs' culls need no front: they go first, before the front update and
-    // what it emits take the device's memory.
+    // what it emits take the device's memory. They emit what they keep in any order
+    // (orphans.cl).
     // Each returns its pass, where there are pairs, for the arguments of its kernel.
     auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, const char* kernel,
                             StreamId& pairs, StreamId& kept) -> PassSpec* {
       if (count == 0) return nullptr;
       pairs = g.fixed(name, 8, count);
       kept = g.variable(kept_name, 8, sized(std::max<std::size_t>(256, count / 8)));
-      return &g.pass(std::string("cull ") + name, {program, kernel, front_option})
+      return &g.pass(std::string("cull ") + name, {"ccd/orphans.cl", kernel})
                   .launch_over(pairs)
-                  .cull(pairs, kept)
+                  .emit(kept)
+                  .emits_in_any_order()
                   .arg(buffer_of(pairs))
                   .arg(count_of(pairs));
     };
