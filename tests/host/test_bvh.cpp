@@ -181,3 +181,38 @@ TEST_CASE("positions round to the nearest floats, exact only where every coordin
     }
   }
 }
+
+// Large inputs are rounded block by block on several threads: what any one block finds
+// (a coordinate off a float, one out of range) still tells for the whole array, every
+// coordinate lands where it belongs, and the exact copy is the input.
+TEST_CASE("positions of a large object round and copy in blocks, each block's finding telling for the whole",
+          "[host][bvh][quick]")
+{
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> coordinate(-1e3, 1e3);
+  const std::size_t vertices = 40000;
+  std::vector<Vec3> x(vertices);
+  for (auto& p : x)
+    for (int k = 0; k < 3; ++k) p[k] = double(float(coordinate(random)));
+  std::vector<float> out(3 * vertices);
+  std::vector<Vec3> copy(vertices);
+  const FloatRounding exact = round_to_float(x, out.data(), copy.data());
+  CHECK(exact.finite);
+  CHECK(exact.exact);
+  CHECK(copy == x);
+  for (const std::size_t j : {std::size_t(0), std::size_t(3 * 8192 + 1), 3 * vertices / 2, 3 * vertices - 1}) {
+    INFO("coordinate " << j);
+    std::vector<Vec3> one_off = x;
+    double& c = one_off[j / 3][int(j % 3)];
+    c = c / 3 + 1e-3;
+    const FloatRounding off = round_to_float(one_off, out.data(), copy.data());
+    CHECK(off.finite);
+    CHECK_FALSE(off.exact);
+    CHECK(copy == one_off);
+    bool rounded = true;
+    for (std::size_t i = 0; i < out.size(); ++i) rounded &= out[i] == float(one_off[i / 3][int(i % 3)]);
+    CHECK(rounded);
+    c = std::nan("");
+    CHECK_FALSE(round_to_float(one_off, out.data()).finite);
+  }
+}

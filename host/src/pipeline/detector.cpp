@@ -157,9 +157,9 @@ struct Detector::State {
                                 const std::vector<Vec3>& x)
   {
     const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex, n = x.size();
-    const FloatRounding r = round_to_float(x, static_cast<float*>(given.stage(single, first, n, 3 * sizeof(float))));
-    if (r.finite && has(exact)) std::memcpy(given.stage(exact, first, n, sizeof(Vec3)), x.data(), n * sizeof(Vec3));
-    return r;
+    float* const rounded = static_cast<float*>(given.stage(single, first, n, 3 * sizeof(float)));
+    Vec3* const copy = has(exact) ? static_cast<Vec3*>(given.stage(exact, first, n, sizeof(Vec3))) : nullptr;
+    return round_to_float(x, rounded, copy);
   }
 
   // Positions given for the next step's ends: staged together, or (a coordinate that is
@@ -225,8 +225,10 @@ struct Detector::State {
         const std::vector<Vec3>* x = ahead.ends[slot.object];
         if (!x) continue;
         const std::size_t first = slot.first_vertex;
-        uploads.floats[slot.object] = round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first).exact;
-        if (exact) std::copy(x->begin(), x->end(), static_cast<Vec3*>(ahead.exact.data()) + first);
+        uploads.floats[slot.object] =
+            round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first,
+                           exact ? static_cast<Vec3*>(ahead.exact.data()) + first : nullptr)
+                .exact;
         append_run(runs, Run{first, x->size()});
       }
       const std::size_t vertex = 3 * sizeof(float);

@@ -43,9 +43,11 @@ FloatPositions rounded_positions(const std::vector<Vec3>& x);
 // Rounding into `out` checks as it goes, in the same pass: whether every coordinate is
 // a finite float (else `out` is of no use, and check_float_positions() names the first
 // that is not) and whether the floats are the input itself (FloatPositions::exact).
+// Where `copy` is given, x is copied there in the same pass. Large inputs are rounded
+// on several threads.
 struct FloatRounding {
   bool finite = true, exact = true;
 };
-FloatRounding round_to_float(const std::vector<Vec3>& x, float* out);
+FloatRounding round_to_float(const std::vector<Vec3>& x, float* out, Vec3* copy = nullptr);
 
 }  // namespace cstreams
