@@ -163,6 +163,25 @@ CS_GROUP_KERNEL void cs_scan_in_one_group(__global const uint* in, const uint n,
   if (total_slot != CS_NO_SLOT && get_local_id(0) == 0) counters[total_slot] = end;
 }
 
+/* Two scans at once, a group each, tile after tile (Scan::exclusive_both): one launch
+ * where two inputs of a few tiles each took two each, as a pass's two outputs' segment
+ * counts do. */
+CS_GROUP_KERNEL void cs_scan_two_in_a_group_each(__global const uint* in0, const uint n0, __global uint* out0,
+                                                 const uint total_slot0, __global const uint* in1, const uint n1,
+                                                 __global uint* out1, const uint total_slot1,
+                                                 __global uint* counters)
+{
+  __local uint tile[CS_PAD(CS_SCAN_TILE)];
+  __local uint scratch[CS_WG_SIZE];
+  const int second = get_group_id(0) == 1;
+  __global const uint* in = second ? in1 : in0;
+  __global uint* out = second ? out1 : out0;
+  const uint n = second ? n1 : n0, total_slot = second ? total_slot1 : total_slot0;
+  uint end = 0;
+  for (size_t base = 0; base < n; base += CS_SCAN_TILE) end = cs_scan_tile(in, n, out, base, end, tile, scratch);
+  if (total_slot != CS_NO_SLOT && get_local_id(0) == 0) counters[total_slot] = end;
+}
+
 CS_GROUP_KERNEL void cs_compact_in_one_group(__global const uint* keep, const uint n, __global const uint* src,
                                              const uint words, __global uint* dst, const uint capacity,
                                              __global uint* counters, const uint total_slot)

@@ -915,15 +915,20 @@ struct Scheduler::State {
         context.launch(merge_interleaved, e.segments * e.segment_capacity, wg, tl(), label);
       }
     } else if (p.mode == Registration::segmented_lock && global > 0) {
+      // The scans first, two outputs' at once, then the merges.
+      std::vector<Scan::Job> scans;
       for (auto& e : p.emitters) {
-        auto& dst = state(e.stream);
-        with_memory([&] {
-          ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets");
-          if (scans_at_once(p, e))
-            scan.exclusive(e.counts, e.offsets, e.segments, counters, dst.slot, tl(), label.c_str());
-        });
-        if (!packs_late(p, e)) merge_segments(p, e);
+        with_memory(
+            [&] { ensure_capacity(context, e.offsets, (e.segments + 1) * sizeof(cl_uint), "registration offsets"); });
+        if (scans_at_once(p, e)) scans.push_back({&e.counts, &e.offsets, e.segments, state(e.stream).slot});
       }
+      with_memory([&] {
+        for (std::size_t k = 0; k < scans.size(); k += 2)
+          if (k + 1 < scans.size()) scan.exclusive_both(scans[k], scans[k + 1], counters, tl(), label.c_str());
+          else scan.exclusive(*scans[k].in, *scans[k].out, scans[k].n, counters, scans[k].slot, tl(), label.c_str());
+      });
+      for (auto& e : p.emitters)
+        if (!packs_late(p, e)) merge_segments(p, e);
     }
     if (p.spec->culls()) {
       auto& dst = state(p.spec->cull_target);

@@ -146,6 +146,42 @@ TEST_CASE("a scan of a few tiles takes one launch, and is right in place", "[run
   check_scan(4 * tile + 1, true);
 }
 
+// A pass's two outputs' segment counts: scanned together in one launch while each is a
+// few tiles long, in two scans each beyond, always equal to the host's scans of each,
+// each total in its own counter.
+TEST_CASE("two scans at once equal the host's, in one launch while each input is short", "[runtime][scan][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  Scan scan(ctx);
+  const std::size_t tile = scan.tile_items();
+  for (const auto& [na, nb] : std::vector<std::pair<std::size_t, std::size_t>>{
+           {1, 1}, {tile + 1, 3}, {11 * tile + 5, 5 * tile}, {16 * tile, 16 * tile}, {16 * tile + 1, 2}, {0, 7}}) {
+    INFO("sizes " << na << " and " << nb);
+    const auto a = random_values(na, std::uint32_t(na), 1000), b = random_values(nb, std::uint32_t(nb) + 1, 1000);
+    Buffer in_a(ctx, na * 4 + 4, "scan input"), out_a(ctx, na * 4 + 4, "scan output");
+    Buffer in_b(ctx, nb * 4 + 4, "scan input"), counters(ctx, 12, "counters");
+    ctx.write(in_a, a.data(), na * 4);
+    ctx.write(in_b, b.data(), nb * 4);
+    ctx.fill_u32(counters, 0xdeadbeef, 0, 3);
+    const std::uint64_t before = ctx.kernel_launches();
+    scan.exclusive_both({&in_a, &out_a, na, 2}, {&in_b, &in_b, nb, 0}, counters);
+    const std::uint64_t launches = ctx.kernel_launches() - before;
+    // An empty input launches nothing.
+    if (na > 0 && nb > 0) CHECK((launches == 1) == (na <= 16 * tile && nb <= 16 * tile));
+    std::vector<cl_uint> result_a(na), result_b(nb), totals(3), expected_a(na), expected_b(nb);
+    ctx.read(out_a, result_a.data(), na * 4);
+    ctx.read(in_b, result_b.data(), nb * 4);
+    ctx.read(counters, totals.data(), 12);
+    std::exclusive_scan(a.begin(), a.end(), expected_a.begin(), cl_uint(0));
+    std::exclusive_scan(b.begin(), b.end(), expected_b.begin(), cl_uint(0));
+    CHECK(result_a == expected_a);
+    CHECK(result_b == expected_b);
+    CHECK(totals[2] == std::accumulate(a.begin(), a.end(), cl_uint(0)));
+    CHECK(totals[0] == std::accumulate(b.begin(), b.end(), cl_uint(0)));
+    CHECK(totals[1] == 0xdeadbeef);
+  }
+}
+
 TEST_CASE("exclusive scan equals the host's at millions of items", "[runtime][scan][slow]")
 {
   for (std::size_t n : {std::size_t(1) << 22, (std::size_t(1) << 22) + 1, std::size_t(5'000'011)}) check_scan(n, false);

@@ -25,6 +25,18 @@ public:
   // The sum of all n values goes to counters[slot] unless slot is no_slot.
   void exclusive(const Buffer& in, const Buffer& out, std::size_t n, const Buffer& counters, std::uint32_t slot,
                  Timeline* timeline = nullptr, const char* label = "scan");
+  // One exclusive scan as above.
+  struct Job {
+    const Buffer* in;
+    const Buffer* out;
+    std::size_t n;
+    std::uint32_t slot;
+  };
+  // Both scans, in one launch where each input is short enough for one group to scan
+  // (a launch costs more than a group's scan of a few tiles: 5-15 us of host time on
+  // the H100), else one after the other.
+  void exclusive_both(const Job& a, const Job& b, const Buffer& counters, Timeline* timeline = nullptr,
+                      const char* label = "scan");
   // Copies item i of `src` (items of `words` 32-bit words) for every i < n with
   // keep[i] != 0 into `dst`, in order, which holds `capacity` items; items past
   // capacity are dropped, and counters[slot] receives the number of kept items either
@@ -52,6 +64,7 @@ private:
   Kernel reduce_;
   Kernel tiles_;
   Kernel one_group_;
+  Kernel two_in_a_group_each_;
   Kernel compact_tiles_;
   Kernel compact_one_group_;
   std::vector<Buffer> levels_;
