@@ -678,6 +678,68 @@ TEST_CASE("passes update a fixed stream in place, in declaration order, before i
   }
 }
 
+// A pass behind a parameter (PassSpec::only_while): skipped while it is 0, its output
+// keeping what it held and the pass launching nothing; run while it is set; refused
+// where the pass emits, or the parameter is not four bytes.
+TEST_CASE("a pass runs only while its parameter is set, and its output keeps what it held otherwise",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  const std::size_t n = 1000;
+  auto values = g.fixed("values", 4, n);
+  auto squares = g.fixed("squares", 4, n);
+  auto pairs = g.variable("pairs", 8, 16);
+  const ParamId wanted = g.param("squares wanted", 4);
+  g.pass("square", {program, "test_square"})
+      .launch_over(values)
+      .write(squares)
+      .only_while(wanted)
+      .arg(buffer_of(values))
+      .arg(count_of(values))
+      .arg(buffer_of(squares));
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  const auto first = random_values(n, 5), second = random_values(n, 6);
+  std::vector<std::uint32_t> first_squares(n);
+  for (std::size_t i = 0; i < n; ++i) first_squares[i] = first[i] * first[i];
+  const auto launches_of_square = [&] {
+    for (const auto& p : s.stats().passes)
+      if (p.name == "square") return p.launches;
+    return 0u;
+  };
+  s.upload(values, first);
+  s.set(wanted, cl_uint(1));
+  s.run();
+  CHECK(launches_of_square() == 1);
+  CHECK(s.download<std::uint32_t>(squares) == first_squares);
+  s.upload(values, second);
+  s.set(wanted, cl_uint(0));
+  s.run();
+  CHECK(launches_of_square() == 0);
+  CHECK(s.download<std::uint32_t>(squares) == first_squares);
+  CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(second).pairs));
+
+  StreamGraph emitting;
+  auto v = emitting.fixed("values", 4, n);
+  auto out = emitting.variable("pairs", 8, 16);
+  const ParamId flag = emitting.param("flag", 4);
+  emitting.pass("expand", {program, "test_expand"}).launch_over(v).emit(out).only_while(flag).arg(buffer_of(v)).arg(count_of(v));
+  CHECK_THROWS_WITH(Scheduler(ctx, emitting, {}), Catch::Contains("expand") && Catch::Contains("parameter"));
+  StreamGraph eight_bytes;
+  auto w = eight_bytes.fixed("values", 4, n);
+  auto sq = eight_bytes.fixed("squares", 4, n);
+  const ParamId long_flag = eight_bytes.param("wide", 8);
+  eight_bytes.pass("square", {program, "test_square"})
+      .launch_over(w)
+      .write(sq)
+      .only_while(long_flag)
+      .arg(buffer_of(w))
+      .arg(count_of(w))
+      .arg(buffer_of(sq));
+  CHECK_THROWS_WITH(Scheduler(ctx, eight_bytes, {}), Catch::Contains("square") && Catch::Contains("parameter"));
+}
+
 namespace {
 
 // The work list of test_tree_* (stream_test.cl) over `n` values, with the deepest leaf

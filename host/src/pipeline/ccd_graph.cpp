@@ -569,9 +569,9 @@ struct GraphBuilder {
     if (s.kept_vf != runtime::StreamId{}) in.candidates.emplace_back(s.kept_vf, ContactKind::vertex_face);
     if (s.kept_ee != runtime::StreamId{}) in.candidates.emplace_back(s.kept_ee, ContactKind::edge_edge);
     s.vertex_object = g.fixed("vertex objects", 4, t.vertex_count);
+    s.earliest_only = g.param("earliest only", 4);
     if (solver.solver == Solver::conservative) {
       s.object_contacts = g.fixed("earliest contact found", 8, l.slots.size());
-      s.earliest_only = g.param("earliest only", 4);
       in.vertex_object = s.vertex_object;
       in.object_contacts = s.object_contacts;
       in.earliest_only = s.earliest_only;
@@ -579,7 +579,10 @@ struct GraphBuilder {
     s.contacts = add_elementary_tests(g, in, solver, device, [this](std::size_t guess) { return sized(guess); });
   }
 
-  // The earliest time of impact per object, by an atomic minimum over the contacts.
+  // The earliest time of impact per object, by an atomic minimum over the contacts, in
+  // the steps that report nothing else: where the contacts come back, the host takes
+  // the minimum from them if asked (Detector::earliest_toi), and the step is two
+  // launches shorter.
   void earliest_toi()
   {
     using namespace runtime;
@@ -589,9 +592,12 @@ struct GraphBuilder {
     g.pass("clear earliest toi", {earliest, "cs_clear_earliest", time_options})
         .launch_items(l.slots.size())
         .write(s.earliest)
+        .only_while(s.earliest_only)
         .arg(value_of(cl_uint(l.slots.size())))
         .arg(buffer_of(s.earliest));
-    auto& pass = g.pass("earliest toi", {earliest, "cs_earliest_toi", time_options}).update(s.earliest);
+    auto& pass = g.pass("earliest toi", {earliest, "cs_earliest_toi", time_options})
+                     .update(s.earliest)
+                     .only_while(s.earliest_only);
     over_streams(pass, s.contacts, "the earliest time of impact");
     pass.arg(buffer_of(s.faces)).arg(buffer_of(s.edges)).arg(buffer_of(s.vertex_object)).arg(buffer_of(s.earliest));
   }

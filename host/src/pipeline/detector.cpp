@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <future>
 #include <map>
@@ -355,7 +356,7 @@ void Detector::run_step(Report report)
   s.given.queue(*s.scheduler);
   s.start_uploads_ahead();
   const CcdStreams& st = s.streams;
-  if (has(st.object_contacts)) s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
+  s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
   const auto all = [](const std::vector<bool>& v) { return std::find(v.begin(), v.end(), false) == v.end(); };
   s.scheduler->set(st.exact_floats, cl_uint(all(s.start_exact) && all(s.end_exact)));
   s.stats.front_retries = s.front.run(*s.scheduler, st);
@@ -405,6 +406,17 @@ std::vector<double> Detector::earliest_toi() const
   s.check_usable();
   runtime::Context::ThreadGuard one_thread(s.context);
   std::vector<double> out(s.scene.objects.size(), 1.0);
+  // A step that read its contacts back left the device's minimum undone (ccd_graph.cpp):
+  // the same minimum over the same times, each rounded down to float as earliest.cl
+  // rounds it.
+  if (s.have_contacts) {
+    for (const Contact& c : s.contacts) {
+      float t = static_cast<float>(c.toi);
+      if (double(t) > c.toi) t = std::nextafter(t, 0.0f);
+      for (const std::uint32_t o : {c.object_a, c.object_b}) out[o] = std::min(out[o], double(t));
+    }
+    return out;
+  }
   if (!has(s.streams.earliest)) return out;
   const auto bits = s.scheduler->download<std::uint32_t>(s.streams.earliest);
   for (std::size_t o = 0; o < out.size(); ++o) {

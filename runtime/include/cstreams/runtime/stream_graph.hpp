@@ -115,6 +115,7 @@ struct PassSpec {
   std::optional<Worklist> worklist;
   StreamId stop_flag;                 // a fixed output: a nonzero first word stops the run
   bool any_order = false;             // emits_in_any_order()
+  ParamId runs_while;                 // only_while(); unset: every run
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
   PassSpec& launch_over(std::vector<StreamId> streams)
@@ -163,6 +164,11 @@ struct PassSpec {
   // registration, which spares the segments' scan and merge. The order then varies
   // from run to run.
   PassSpec& emits_in_any_order() { any_order = true; return *this; }
+  // The pass runs only while the 4-byte parameter `p` is not 0 (a result the host asks
+  // for in some runs alone); otherwise it is skipped, and the fixed streams it writes or
+  // updates keep what they held. Such a pass must not emit, cull or refine, whose
+  // outputs later passes could not do without.
+  PassSpec& only_while(ParamId p) { runs_while = p; return *this; }
   bool culls() const { return cull_source.index != 0xffffffffu; }
   bool stops() const { return stop_flag.index != 0xffffffffu; }
 };
