@@ -1421,7 +1421,7 @@ struct Scheduler::State {
   // flush has no room for a pass's outputs, says which pass.
   Failure step(PassState& p, std::vector<PassState*>& stage)
   {
-    if (p.spec->runs_while.index != ParamId{}.index && !nonzero(p.spec->runs_while)) return {};
+    if (p.spec->conditional() && !nonzero(p.spec->runs_while)) return {};
     const std::size_t index = std::size_t(&p - passes.data());
     if (needs_new_stage(p))
       if (auto f = end_stage(stage)) return f;

@@ -110,7 +110,7 @@ std::vector<std::size_t> StreamGraph::schedule() const
            (w->extra_state_while.index >= params_.size() || params_[w->extra_state_while.index].bytes != 4)))
         throw Error("pass " + pass.name + " keeps extra state that is not in whole words or not behind a 4-byte parameter");
     }
-    if (pass.runs_while.index != ParamId{}.index &&
+    if (pass.conditional() &&
         (pass.runs_while.index >= params_.size() || params_[pass.runs_while.index].bytes != 4 || !pass.emits.empty() ||
          pass.culls() || pass.worklist))
       throw Error("pass " + pass.name + " runs only while a parameter is set, but that is not a 4-byte parameter, or the "

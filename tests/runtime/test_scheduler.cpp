@@ -685,19 +685,23 @@ TEST_CASE("a pass runs only while its parameter is set, and its output keeps wha
           "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
-  StreamGraph g;
   const std::size_t n = 1000;
-  auto values = g.fixed("values", 4, n);
-  auto squares = g.fixed("squares", 4, n);
-  auto pairs = g.variable("pairs", 8, 16);
+  // values -> (square, only while `wanted`) squares
+  const auto add_square = [&](StreamGraph& graph, ParamId wanted) {
+    const StreamId values = graph.fixed("values", 4, n), squares = graph.fixed("squares", 4, n);
+    graph.pass("square", {program, "test_square"})
+        .launch_over(values)
+        .write(squares)
+        .only_while(wanted)
+        .arg(buffer_of(values))
+        .arg(count_of(values))
+        .arg(buffer_of(squares));
+    return std::pair{values, squares};
+  };
+  StreamGraph g;
   const ParamId wanted = g.param("squares wanted", 4);
-  g.pass("square", {program, "test_square"})
-      .launch_over(values)
-      .write(squares)
-      .only_while(wanted)
-      .arg(buffer_of(values))
-      .arg(count_of(values))
-      .arg(buffer_of(squares));
+  const auto [values, squares] = add_square(g, wanted);
+  auto pairs = g.variable("pairs", 8, 16);
   g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
   Scheduler s(ctx, g, {Registration::segmented_lock, true});
   const auto first = random_values(n, 5), second = random_values(n, 6);
@@ -727,16 +731,7 @@ TEST_CASE("a pass runs only while its parameter is set, and its output keeps wha
   emitting.pass("expand", {program, "test_expand"}).launch_over(v).emit(out).only_while(flag).arg(buffer_of(v)).arg(count_of(v));
   CHECK_THROWS_WITH(Scheduler(ctx, emitting, {}), Catch::Contains("expand") && Catch::Contains("parameter"));
   StreamGraph eight_bytes;
-  auto w = eight_bytes.fixed("values", 4, n);
-  auto sq = eight_bytes.fixed("squares", 4, n);
-  const ParamId long_flag = eight_bytes.param("wide", 8);
-  eight_bytes.pass("square", {program, "test_square"})
-      .launch_over(w)
-      .write(sq)
-      .only_while(long_flag)
-      .arg(buffer_of(w))
-      .arg(count_of(w))
-      .arg(buffer_of(sq));
+  add_square(eight_bytes, eight_bytes.param("wide", 8));
   CHECK_THROWS_WITH(Scheduler(ctx, eight_bytes, {}), Catch::Contains("square") && Catch::Contains("parameter"));
 }
 

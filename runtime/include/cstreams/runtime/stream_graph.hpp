@@ -171,6 +171,7 @@ struct PassSpec {
   PassSpec& only_while(ParamId p) { runs_while = p; return *this; }
   bool culls() const { return cull_source.index != 0xffffffffu; }
   bool stops() const { return stop_flag.index != 0xffffffffu; }
+  bool conditional() const { return runs_while.index != 0xffffffffu; }
 };
 
 // Every stream a pass reads (declared reads, its launch stream, the culled stream and
