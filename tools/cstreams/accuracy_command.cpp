@@ -289,7 +289,7 @@ void add_accuracy_command(CLI::App& app, Command& command)
   cmd->add_option("--tolerance", o->tolerances, "Solver tolerance(s), relative; several draw a sweep");
   cmd->add_option("--min-separation", o->min_separation, "Minimum separation (conservative solver)");
   cmd->add_option("--max-iterations", o->max_iterations, "Conservative solver's work limit per query");
-  cmd->add_flag("--no-filter", o->no_filter, "Do not run the non-penetration filter first");
+  cmd->add_flag("--no-filter", o->no_filter, "Do not run the non-penetration filter");
   cmd->add_option("--repeat", o->repeat, "Timed repeats after one warm-up (median reported)")->check(CLI::PositiveNumber);
   auto* device = cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
   cmd->add_option("--devices", o->devices,

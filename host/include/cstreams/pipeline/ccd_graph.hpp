@@ -155,7 +155,7 @@ GraphDevice graph_device(const runtime::Context& context);
 
 // Adds the elementary tests of every candidate stream to a graph and returns the
 // contact streams they emit, with their kinds. The cubic solver is one pass. The
-// conservative one is a screen (the filter and the whole-domain bounds), then
+// conservative one is a screen (the whole-domain bounds, then the filter), then
 // breadth-first refinement across the device: a work list of (query, box) items whose
 // rounds launch the device's refine_items work-items. `sized` gives a variable stream's first
 // capacity from a guess. With mark_limits, a contact that only a solver limit reported carries
