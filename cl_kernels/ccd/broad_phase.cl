@@ -134,7 +134,7 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
        * again cost the front update a tenth (H100: cloth-ball 0.40 -> 0.36 ms, n-body
        * 0.56 -> 0.48). */
       int2 stack[CS_BVTT_STACK];
-      int top = 0, tested = 1;
+      int top = 0, first = 1;
       stack[top++] = p;
 #if CS_LOOP_TRIPS
       uint trips = 0;
@@ -147,8 +147,8 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
         }
 #endif
         const int2 q = stack[--top];
-        const int known = tested;
-        tested = 0;
+        const int overlap_known = first;
+        first = 0;
         const int2 a = nodes[q.x], b = nodes[q.y];
         const uint level = (uint)(cs_node_depth(a) + cs_node_depth(b));
         const int in_front = CS_KEEP_FRONT && level <= cap;
@@ -160,7 +160,7 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
           stack[top++] = (int2)(a.x, a.x + 1);
           continue;
         }
-        if (!known && !cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
+        if (!overlap_known && !cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
           if (in_front) CS_FRONT_EMIT(q);
           continue;
         }
