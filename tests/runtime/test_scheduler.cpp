@@ -687,20 +687,14 @@ TEST_CASE("a pass runs only while its parameter is set, and its output keeps wha
   auto& ctx = cstreams::test::device();
   const std::size_t n = 1000;
   // values -> (square, only while `wanted`) squares
-  const auto add_square = [&](StreamGraph& graph, ParamId wanted) {
+  const auto add_square_while = [&](StreamGraph& graph, ParamId wanted) {
     const StreamId values = graph.fixed("values", 4, n), squares = graph.fixed("squares", 4, n);
-    graph.pass("square", {program, "test_square"})
-        .launch_over(values)
-        .write(squares)
-        .only_while(wanted)
-        .arg(buffer_of(values))
-        .arg(count_of(values))
-        .arg(buffer_of(squares));
+    add_square(graph, values, squares).only_while(wanted);
     return std::pair{values, squares};
   };
   StreamGraph g;
   const ParamId wanted = g.param("squares wanted", 4);
-  const auto [values, squares] = add_square(g, wanted);
+  const auto [values, squares] = add_square_while(g, wanted);
   auto pairs = g.variable("pairs", 8, 16);
   g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
   Scheduler s(ctx, g, {Registration::segmented_lock, true});
@@ -731,7 +725,7 @@ TEST_CASE("a pass runs only while its parameter is set, and its output keeps wha
   emitting.pass("expand", {program, "test_expand"}).launch_over(v).emit(out).only_while(flag).arg(buffer_of(v)).arg(count_of(v));
   CHECK_THROWS_WITH(Scheduler(ctx, emitting, {}), Catch::Contains("expand") && Catch::Contains("parameter"));
   StreamGraph eight_bytes;
-  add_square(eight_bytes, eight_bytes.param("wide", 8));
+  add_square_while(eight_bytes, eight_bytes.param("wide", 8));
   CHECK_THROWS_WITH(Scheduler(ctx, eight_bytes, {}), Catch::Contains("square") && Catch::Contains("parameter"));
 }
 
