@@ -53,8 +53,9 @@ inline int cs_bounds_leave_open(const uint2 pair, const uint vertex_face, __glob
                                 __global const real* x1, __global const uint* faces, __global const uint* edges,
                                 const uint exact_input, const real separation)
 {
-  const cs_query query = cs_pair_query(pair, vertex_face, x0, x1, faces, edges, exact_input);
-  const cs_trilinear f = cs_make_trilinear(&query, (int)vertex_face);
+  real q[24];
+  cs_pair_points(pair, vertex_face, x0, x1, faces, edges, q);
+  const cs_trilinear f = cs_points_trilinear(q, vertex_face, exact_input);
   real width, farthest, nearest[2], first, spread[3];
   return cs_trilinear_root_bounds(&f, separation, &width, &farthest, nearest, &first, spread);
 }

@@ -291,7 +291,7 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   }
 #endif
 #if CS_KEEP_FUNCTION
-  s.f = cs_make_trilinear(&query, (int)pair.z);
+  s.f = cs_points_trilinear(q, pair.z, exact_input);
   s.scale = cs_query_scale(&query);
 #endif
   /* In single precision, and only for inputs rounded to float: their bounds stay wide
@@ -356,9 +356,8 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
 #else
         real points[24];
         cs_vertex_points(seen.vertices, x0, x1, points);
-        const cs_query q = cs_points_query(points, exact_input);
-        const cs_trilinear f = cs_make_trilinear(&q, vertex_face);
-        const real scale = cs_query_scale(&q);
+        const cs_trilinear f = cs_points_trilinear(points, (uint)vertex_face, exact_input);
+        const real scale = cs_points_scale(points, exact_input);
 #endif
         const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
         const int levels = round >= CS_CUT_FINER_FROM && last_splits << CS_FINER_HALVINGS <= CS_MOST_BOXES / 2

@@ -77,6 +77,46 @@ inline cs_trilinear cs_make_trilinear(const cs_query* q, const int vertex_face)
   return f;
 }
 
+/* Coefficients j and j + 1 of coordinate k from exact points a and b: the start
+ * difference a - b and the motion difference (a1 - a0) - (b1 - b0), given the points
+ * at t = 0 and the motions ma, mb as computed. Each difference rounded to nearest lies
+ * within CS_EPS / 2 of its value (or CS_TINY, where it flushed) from the exact one, so
+ * the weights need no intervals: EPS |c|, twice that, covers the rounding of c and of
+ * the weight itself, EPS (|ma| + |mb|) the motions', and 4 EPS |c| the evaluation's,
+ * as in cs_make_trilinear, whose weights for the same points these match to a few
+ * ulps. */
+inline void cs_exact_difference(const real a, const real b, const real ma, const real mb, const int j, const int k,
+                                cs_trilinear* f)
+{
+  const real start = a - b, motion = ma - mb;
+  f->c[j][k] = start;
+  f->c[j + 1][k] = motion;
+  f->w[j][k] = cs_up(fabs(start) * ((real)5 * CS_EPS) + CS_TINY);
+  f->w[j + 1][k] = cs_up(fabs(motion) * ((real)5 * CS_EPS) + (fabs(ma) + fabs(mb)) * CS_EPS + (real)3 * CS_TINY);
+}
+
+/* cs_make_trilinear of exact points, q as cs_pair_points gives them (x0's four, then
+ * x1's): the same coefficients, with weights bounded from the computed values rather
+ * than carried through interval arithmetic, for a fraction of its work. */
+inline cs_trilinear cs_make_exact_trilinear(const real q[24], const int vertex_face)
+{
+  cs_trilinear f;
+  for (int k = 0; k < 3; ++k) {
+    const real p0 = q[k], p1 = q[3 + k], p2 = q[6 + k], p3 = q[9 + k];
+    const real m0 = q[12 + k] - p0, m1 = q[15 + k] - p1, m2 = q[18 + k] - p2, m3 = q[21 + k] - p3;
+    if (vertex_face) {
+      cs_exact_difference(p0, p1, m0, m1, 0, k, &f);
+      cs_exact_difference(p1, p2, m1, m2, 2, k, &f);
+      cs_exact_difference(p1, p3, m1, m3, 4, k, &f);
+    } else {
+      cs_exact_difference(p0, p2, m0, m2, 0, k, &f);
+      cs_exact_difference(p1, p0, m1, m0, 2, k, &f);
+      cs_exact_difference(p2, p3, m2, m3, 4, k, &f);
+    }
+  }
+  return f;
+}
+
 /* The error bound of F_k at a point from e, the error weights' sum there. That sum is
  * of non-negative terms: eleven roundings at most, covered by 8 CS_EPS; and up to eleven
  * results flushed to zero in the value and as many in the error. */
