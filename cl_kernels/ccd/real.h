@@ -12,6 +12,9 @@
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
 typedef double real;
+typedef double2 real2;
+typedef double4 real4;
+typedef double8 real8;
 /* 2^-52: |x| * CS_EPS is at least one ulp of x. CS_TINY covers results that flushed
  * or underflowed to zero (devices may flush subnormals). */
 #define CS_EPS 0x1p-52
@@ -19,6 +22,9 @@ typedef double real;
 #define CS_REAL_MAX DBL_MAX
 #else
 typedef float real;
+typedef float2 real2;
+typedef float4 real4;
+typedef float8 real8;
 #define CS_EPS 0x1p-23f
 #define CS_TINY FLT_MIN
 #define CS_REAL_MAX FLT_MAX
@@ -28,6 +34,7 @@ typedef float real;
  * to nearest, so the result stays at least half an ulp below x. */
 inline real cs_down(real x) { return x - (fabs(x) * CS_EPS + CS_TINY); }
 inline real cs_up(real x) { return x + (fabs(x) * CS_EPS + CS_TINY); }
+inline real8 cs_up8(real8 x) { return x + (fabs(x) * CS_EPS + CS_TINY); }
 
 typedef struct {
   real lo, hi;
