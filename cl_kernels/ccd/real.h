@@ -31,10 +31,12 @@ typedef float8 real8;
 #endif
 
 /* One step below / above x that is at least one ulp: the subtraction itself rounds
- * to nearest, so the result stays at least half an ulp below x. */
-inline real cs_down(real x) { return x - (fabs(x) * CS_EPS + CS_TINY); }
-inline real cs_up(real x) { return x + (fabs(x) * CS_EPS + CS_TINY); }
-inline real8 cs_up8(real8 x) { return x + (fabs(x) * CS_EPS + CS_TINY); }
+ * to nearest, so the result stays at least half an ulp below x. The step is a macro,
+ * for a real or each lane of a real8 alike. */
+#define CS_ROUNDING_STEP(x) (fabs(x) * CS_EPS + CS_TINY)
+inline real cs_down(real x) { return x - CS_ROUNDING_STEP(x); }
+inline real cs_up(real x) { return x + CS_ROUNDING_STEP(x); }
+inline real8 cs_up8(real8 x) { return x + CS_ROUNDING_STEP(x); }
 
 typedef struct {
   real lo, hi;
