@@ -131,11 +131,17 @@ struct PassState {
   const PassSpec* spec = nullptr;
   Kernel kernel;          // built for the scheduler's registration
   Kernel atomic_kernel;   // built on first need: the fallback when segments would not fit
+  Kernel variant, atomic_variant;  // the same two of PassSpec::instead_while's kernel
   Registration mode = Registration::global_atomic;  // of the current execution
   bool atomic_this_run = false;
   bool handed_over = false;  // packed an output into its input's buffer this run
   bool ran = false;          // executed this run
-  const Kernel& active() const { return mode == Registration::global_atomic && atomic_kernel.get() ? atomic_kernel : kernel; }
+  const Kernel& active(bool instead) const
+  {
+    const bool atomic = mode == Registration::global_atomic && atomic_kernel.get();
+    if (instead) return atomic ? atomic_variant : variant;
+    return atomic ? atomic_kernel : kernel;
+  }
   std::vector<EmitterState> emitters;
   Buffer keep;
   std::size_t keep_at = StepArena::none;
@@ -545,9 +551,15 @@ struct Scheduler::State {
     return index;
   }
 
+  // The kernel an execution of p launches: its variant while the variant's parameter is set.
+  const Kernel& active(const PassState& p) const
+  {
+    return p.active(!p.spec->variant_kernel.empty() && nonzero(p.spec->variant_while));
+  }
+
   void bind_args(PassState& p)
   {
-    const Kernel& k = p.active();
+    const Kernel& k = active(p);
     unsigned index = bind_own_args(*p.spec, k);
     if (p.list) k.set_arg(index++, p.list->state);
     for (auto& e : p.emitters) {
@@ -646,7 +658,11 @@ struct Scheduler::State {
       drop_segments(e);
       e.segment_bytes = 0;
     }
-    if (!p.atomic_kernel.get()) p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
+    if (!p.atomic_kernel.get()) {
+      p.atomic_kernel = build_kernel(*p.spec, Registration::global_atomic);
+      if (!p.spec->variant_kernel.empty())
+        p.atomic_variant = build_kernel(*p.spec, Registration::global_atomic, p.spec->variant_kernel);
+    }
     p.mode = Registration::global_atomic;
     p.atomic_this_run = true;
   }
@@ -900,7 +916,7 @@ struct Scheduler::State {
         if (state(e.stream).capacity < guess) with_memory([&] { grow(e.stream, guess); });
       }
       bind_args(p);
-      context.launch(p.active(), global, wg, tl(), label);
+      context.launch(active(p), global, wg, tl(), label);
       ++p.stats.launches;
     }
     if (p.mode == Registration::lock_free) {
@@ -1719,6 +1735,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     p.spec = &spec;
     const Registration registration = s.registration_of(spec);
     p.kernel = s.build_kernel(spec, registration);
+    if (!spec.variant_kernel.empty()) p.variant = s.build_kernel(spec, registration, spec.variant_kernel);
     if (const auto& w = spec.worklist) {
       auto& l = p.list.emplace();
       l.seed = s.build_kernel(spec, registration, w->seed);

@@ -56,12 +56,23 @@ const StreamSpec& StreamGraph::stream(StreamId s) const
   return streams_[s.index];
 }
 
+namespace {
+
+bool in_place(const PassSpec& p, StreamId s)
+{
+  return std::find(p.updates.begin(), p.updates.end(), s) != p.updates.end() ||
+         std::find(p.lowers.begin(), p.lowers.end(), s) != p.lowers.end();
+}
+
+}  // namespace
+
 std::vector<StreamId> pass_outputs(const PassSpec& p)
 {
   std::vector<StreamId> out = p.writes;
   out.insert(out.end(), p.emits.begin(), p.emits.end());
   if (p.culls()) out.push_back(p.cull_target);
   out.insert(out.end(), p.updates.begin(), p.updates.end());
+  out.insert(out.end(), p.lowers.begin(), p.lowers.end());
   return out;
 }
 
@@ -75,10 +86,8 @@ std::vector<StreamId> pass_inputs(const PassSpec& p)
   for (const auto& a : p.args)
     if (auto b = std::get_if<BufferArg>(&a))
       if (std::find(outputs.begin(), outputs.end(), b->stream) == outputs.end()) in.push_back(b->stream);
-  // A stream updated in place is the pass's output, ordered as such, not an input.
-  in.erase(std::remove_if(in.begin(), in.end(),
-                          [&](StreamId s) { return std::find(p.updates.begin(), p.updates.end(), s) != p.updates.end(); }),
-           in.end());
+  // A stream updated or lowered in place is the pass's output, ordered as such, not an input.
+  in.erase(std::remove_if(in.begin(), in.end(), [&](StreamId s) { return in_place(p, s); }), in.end());
   return in;
 }
 
@@ -115,6 +124,10 @@ std::vector<std::size_t> StreamGraph::schedule() const
          pass.culls() || pass.worklist))
       throw Error("pass " + pass.name + " runs only while a parameter is set, but that is not a 4-byte parameter, or the "
                   "pass emits, culls or refines a work list");
+    if (!pass.variant_kernel.empty() &&
+        (pass.variant_while.index >= params_.size() || params_[pass.variant_while.index].bytes != 4 || pass.worklist))
+      throw Error("pass " + pass.name + " launches " + pass.variant_kernel +
+                  " while a parameter is set, but that is not a 4-byte parameter, or the pass refines a work list");
     for (StreamId s : pass.updates) {
       if (stream(s).variable) throw Error("pass " + pass.name + " updates variable-length stream " + stream(s).name);
       if (!pass.emits.empty() || pass.culls())
@@ -122,8 +135,12 @@ std::vector<std::size_t> StreamGraph::schedule() const
                     " in place but also emits or culls, and so may be rerun");
       updaters[s.index].push_back(p);
     }
+    for (StreamId s : pass.lowers) {
+      if (stream(s).variable) throw Error("pass " + pass.name + " lowers variable-length stream " + stream(s).name);
+      updaters[s.index].push_back(p);
+    }
     for (StreamId s : pass_outputs(pass)) {
-      if (std::find(pass.updates.begin(), pass.updates.end(), s) != pass.updates.end()) continue;
+      if (in_place(pass, s)) continue;
       const auto& spec = stream(s);
       if (writer[s.index] >= 0)
         throw Error("stream " + spec.name + " is written by both " + passes_[writer[s.index]].name + " and " + pass.name);
@@ -165,7 +182,10 @@ std::vector<std::size_t> StreamGraph::schedule() const
       if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
       for (std::size_t u : updaters[s.index]) deps[p].push_back(u);  // readers see every update
     }
-    for (StreamId s : passes_[p].updates) {
+    const auto& pass = passes_[p];
+    std::vector<StreamId> in_place_outputs = pass.updates;
+    in_place_outputs.insert(in_place_outputs.end(), pass.lowers.begin(), pass.lowers.end());
+    for (StreamId s : in_place_outputs) {
       if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
       for (std::size_t u : updaters[s.index])
         if (u < p) deps[p].push_back(u);  // updates apply in declaration order

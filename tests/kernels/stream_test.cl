@@ -111,6 +111,33 @@ __kernel void test_times_two(__global uint* values, const uint n)
   if (i < n) values[i] *= 2u;
 }
 
+/* A running minimum, for the scheduler's lower() passes: every value's expansion as in
+ * test_expand, and its hash taken into least[value % m]. */
+__kernel void test_clear_least(const uint m, __global uint* least)
+{
+  const uint i = get_global_id(0);
+  if (i < m) least[i] = 0xffffffffu;
+}
+
+__kernel void test_expand_lowering(__global const uint* values, const uint n, const uint m, __global uint* least,
+                                   CS_EMITTER_PARAMS(uint2, pairs))
+{
+  CS_EMITTER_BEGIN(pairs);
+  const uint i = get_global_id(0);
+  if (i < n) {
+    const uint count = test_emit_count(values[i]);
+    for (uint k = 0; k < count; ++k) CS_EMIT(pairs, (uint2)(i, k));
+    atomic_min(&least[values[i] % m], test_hash(values[i]));
+  }
+  CS_EMITTER_END(pairs);
+}
+
+__kernel void test_copy(__global const uint* from, const uint n, __global uint* to)
+{
+  const uint i = get_global_id(0);
+  if (i < n) to[i] = from[i];
+}
+
 /* A work list: input i splits into two items a round until depth test_depth(value),
  * and each leaf counts itself in the input's state, so input i ends with 2^depth, twice
  * that where the seed gives it two trees. With `deepest` set, the state also holds,

@@ -678,6 +678,77 @@ TEST_CASE("passes update a fixed stream in place, in declaration order, before i
   }
 }
 
+// A pass that emits may take a running minimum into a fixed stream (PassSpec::lower):
+// it runs after the stream's writer and before its reader, and growing what it emits
+// runs it again, which leaves the same minimums.
+TEST_CASE("a pass that emits lowers a fixed stream to minimums, after its writer, through its reruns",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 10007, m = 61;
+  StreamGraph g;
+  auto values = g.fixed("values", 4, n);
+  auto least = g.fixed("least", 4, m), copied = g.fixed("copied", 4, m);
+  auto pairs = g.variable("pairs", 8, 16);
+  // Declared reader first: the scheduler must run clear, expand, copy.
+  g.pass("copy", {program, "test_copy"}).launch_items(m).read(least).write(copied).arg(buffer_of(least))
+      .arg(value_of(cl_uint(m))).arg(buffer_of(copied));
+  g.pass("expand", {program, "test_expand_lowering"})
+      .launch_over(values)
+      .emit(pairs)
+      .lower(least)
+      .arg(buffer_of(values))
+      .arg(count_of(values))
+      .arg(value_of(cl_uint(m)))
+      .arg(buffer_of(least));
+  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(least).arg(value_of(cl_uint(m))).arg(buffer_of(least));
+  for (auto registration : {Registration::lock_free, Registration::segmented_lock}) {
+    Scheduler s(ctx, g, {registration, true});
+    CHECK(s.execution_order() == std::vector<std::string>{"clear", "expand", "copy"});
+    const auto v = random_values(n, 23);
+    s.upload(values, v);
+    s.run();
+    REQUIRE(s.stats().passes.at(1).name == "expand");
+    CHECK(s.stats().passes.at(1).reruns > 0);
+    std::vector<std::uint32_t> expected(m, 0xffffffffu);
+    for (std::uint32_t x : v) expected[x % m] = std::min(expected[x % m], cstreams::test::test_hash(x));
+    CHECK(s.download<std::uint32_t>(least) == expected);
+    CHECK(s.download<std::uint32_t>(copied) == expected);
+    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(v).pairs));
+  }
+}
+
+// A pass launches another kernel of its program while a parameter is set
+// (PassSpec::instead_while), with the same arguments, and its own again once it is not.
+TEST_CASE("a pass launches its variant kernel while its parameter is set", "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 1000;
+  StreamGraph g;
+  const ParamId doubling = g.param("doubling", 4);
+  auto values = g.fixed("values", 4, n);
+  auto pairs = g.variable("pairs", 8, 16);
+  g.pass("bump", {program, "test_plus_one"})
+      .launch_over(values)
+      .update(values)
+      .instead_while(doubling, "test_times_two")
+      .arg(buffer_of(values))
+      .arg(count_of(values));
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  Scheduler s(ctx, g, {Registration::segmented_lock, true});
+  const auto v = random_values(n, 29);
+  std::vector<std::uint32_t> expected = v;
+  s.upload(values, v);
+  for (const cl_uint doubled : {0u, 1u, 1u, 0u}) {
+    INFO("doubling " << doubled);
+    s.set(doubling, doubled);
+    s.run();
+    for (auto& x : expected) x = doubled ? 2u * x : x + 1u;
+    CHECK(s.download<std::uint32_t>(values) == expected);
+    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(expected).pairs));
+  }
+}
+
 // A pass behind a parameter (PassSpec::only_while): skipped while it is 0, its output
 // keeping what it held and the pass launching nothing; run while it is set; refused
 // where the pass emits, or the parameter is not four bytes.
@@ -1069,6 +1140,16 @@ TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][sche
   auto out = update_and_emit.variable("out", 4, 1);
   update_and_emit.pass("p", {program, "k"}).launch_over(fx).update(fx).emit(out);
   CHECK_THROWS_WITH(update_and_emit.schedule(), Catch::Contains("may be rerun"));
+
+  StreamGraph lower_variable;
+  auto lv = lower_variable.variable("lv", 4, 1);
+  lower_variable.pass("p", {program, "k"}).launch_items(4).lower(lv);
+  CHECK_THROWS_WITH(lower_variable.schedule(), Catch::Contains("lowers variable-length stream lv"));
+
+  StreamGraph wide_variant;
+  auto wv = wide_variant.fixed("wv", 4, 1);
+  wide_variant.pass("p", {program, "k"}).launch_over(wv).update(wv).instead_while(wide_variant.param("mode", 8), "k2");
+  CHECK_THROWS_WITH(wide_variant.schedule(), Catch::Contains("pass p launches k2 while a parameter is set"));
 
   StreamGraph list_without_input;
   list_without_input.pass("p", {program, "k"}).launch_items(4).refine({"seed", "round", 8, 4, 64});

@@ -93,10 +93,12 @@ struct Worklist {
 // Kernel signature: the pass's own arguments, then per emitted stream (in emit order)
 // CS_EMITTER_PARAMS(T, name), then for a culling pass `__global uint* keep` (one flag
 // per item of the culled stream). A pass must not write what it reads: reruns after
-// an overflow rely on passes being functions of their inputs. The one exception is
+// an overflow rely on passes being functions of their inputs. The exceptions are
 // update(): a pass that neither emits nor culls (so it never reruns) may modify a
 // fixed stream in place; several such passes apply in declaration order, after the
-// stream's writer and before every pass that reads it (a BVH refit, level by level).
+// stream's writer and before every pass that reads it (a BVH refit, level by level);
+// and lower(): any pass may take a running minimum into a fixed stream, which running
+// it again, or over slices of its input, leaves as one run would.
 struct PassSpec {
   std::string name;
   KernelRef kernel{"", ""};
@@ -107,6 +109,7 @@ struct PassSpec {
   std::vector<StreamId> writes;       // fixed-length outputs
   std::vector<StreamId> emits;        // variable-length outputs, through registration
   std::vector<StreamId> updates;      // fixed-length streams modified in place
+  std::vector<StreamId> lowers;       // fixed-length streams lowered to minimums in place
   StreamId cull_source, cull_target;  // compaction of cull_source into cull_target
   std::vector<std::pair<StreamId, StreamId>> handovers;  // (input, emitted stream): hand_over()
   std::vector<PassArg> args;
@@ -116,6 +119,8 @@ struct PassSpec {
   StreamId stop_flag;                 // a fixed output: a nonzero first word stops the run
   bool any_order = false;             // emits_in_any_order()
   ParamId runs_while;                 // only_while(); unset: every run
+  ParamId variant_while;              // instead_while(): the parameter, and
+  std::string variant_kernel;         // the kernel launched while it is set
 
   PassSpec& launch_over(StreamId s) { over = s; return *this; }
   PassSpec& launch_over(std::vector<StreamId> streams)
@@ -143,6 +148,10 @@ struct PassSpec {
     return items_per_work_item;
   }
   PassSpec& update(StreamId s) { updates.push_back(s); return *this; }
+  // The pass lowers words of the fixed stream s to minimums of what they held and what
+  // it finds (atomic_min), and so may emit, cull or run again: it runs after the
+  // stream's writer and updates, and before every pass that reads s.
+  PassSpec& lower(StreamId s) { lowers.push_back(s); return *this; }
   PassSpec& cull(StreamId source, StreamId target) { cull_source = source; cull_target = target; return *this; }
   PassSpec& arg(PassArg a) { args.push_back(std::move(a)); return *this; }
   PassSpec& expect_items(double per_work_item) { items_per_work_item = per_work_item; return *this; }
@@ -169,6 +178,17 @@ struct PassSpec {
   // updates keep what they held. Such a pass must not emit, cull or refine, whose
   // outputs later passes could not do without.
   PassSpec& only_while(ParamId p) { runs_while = p; return *this; }
+  // While the 4-byte parameter `p` is not 0 the pass launches `kernel` instead, a kernel
+  // of the same program, built with the same options, taking the same arguments: the
+  // pass in an optional mode, whose work its own kernel then carries nothing of (a
+  // kernel with both behind a branch takes the registers of both). Not for a pass that
+  // refines a work list, whose kernels are its own.
+  PassSpec& instead_while(ParamId p, std::string kernel)
+  {
+    variant_while = p;
+    variant_kernel = std::move(kernel);
+    return *this;
+  }
   bool culls() const { return cull_source.index != 0xffffffffu; }
   bool stops() const { return stop_flag.index != 0xffffffffu; }
   bool conditional() const { return runs_while.index != 0xffffffffu; }
