@@ -153,6 +153,44 @@ inline int cs_touching(const real* q, const int vertex_face, const real t, const
   return cs_dot3(gap, gap) <= eps * eps;
 }
 
+/* A time before which cs_touching(q, vertex_face, t, eps) fails: the features' boxes
+ * stay more than `margin` apart along an axis. Each box moves no faster than its
+ * fastest point, so a gap g0 at t = 0 closing at rate r > 0 stays above the margin
+ * until (g0 - margin) / r; a gap that does not close stays. 2 where some gap stays
+ * above the margin through the step, 0 where none starts above it. cs_touching passes
+ * only where the points are within 3 eps: its projection may leave the face by eps
+ * along each edge. */
+inline real cs_apart_until(const real* q, const int vertex_face, const real margin)
+{
+  const int split = vertex_face ? 1 : 2;
+  real until = 0;
+  for (int k = 0; k < 3; ++k) {
+    real lo[2], hi[2], slow[2], fast[2]; /* per side: box at 0, least and most velocity */
+    for (int side = 0; side < 2; ++side) {
+      const int first = side ? split : 0, last = side ? 4 : split;
+      lo[side] = hi[side] = q[3 * first + k];
+      slow[side] = fast[side] = q[3 * (first + 4) + k] - q[3 * first + k];
+      for (int i = first + 1; i < last; ++i) {
+        const real x = q[3 * i + k], v = q[3 * (i + 4) + k] - x;
+        lo[side] = fmin(lo[side], x);
+        hi[side] = fmax(hi[side], x);
+        slow[side] = fmin(slow[side], v);
+        fast[side] = fmax(fast[side], v);
+      }
+    }
+    for (int above = 0; above < 2; ++above) {
+      const real gap = lo[above] - hi[1 - above] - margin, closing = fast[1 - above] - slow[above];
+      if (gap > 0) until = fmax(until, closing > 0 ? gap / closing : 2);
+    }
+  }
+  return until;
+}
+
+/* The margin for cs_apart_until: cs_touching's 3 eps, and room for the rounding of
+ * the points it moves and of the bound itself (CS_EPS per operation on coordinates of
+ * magnitude scale). */
+inline real cs_touching_margin(const real eps, const real scale) { return 3 * eps + 64 * CS_EPS * scale; }
+
 /* at: the time of impact and where (u, v as cs_touching gives them). */
 inline uint cs_cubic(const real* q, const int vertex_face, const real tolerance, real at[3])
 {

@@ -1,14 +1,6 @@
-/* The earliest time of impact per object, without reading back the contacts: times
- * are floats rounded down (so still lower bounds) and, being non-negative, order as
- * their bits do, so an atomic minimum on the bits is a minimum on the times. */
-#pragma OPENCL FP_CONTRACT OFF
-#if CS_REAL_DOUBLE
-#if CS_FP64_AMD
-#pragma OPENCL EXTENSION cl_amd_fp64 : enable
-#else
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
-#endif
-#endif
+/* The earliest time of impact per object, without reading back the contacts
+ * (earliest.h). */
+#include "earliest.h"
 #include "runtime/common.h"
 #include "streams.h"
 
@@ -23,22 +15,11 @@ __kernel void cs_clear_earliest(const uint objects, __global uint* earliest)
 inline uint cs_contact_time_key(const uint4 c)
 {
 #if CS_REAL_DOUBLE
-  const double d = as_double(c.zw);
-  float t = (float)d;
-  if ((double)t > d) t = nextafter(t, 0.0f);
-  return as_uint(t);
+  return cs_time_key(as_double(c.zw));
 #else
   return c.z;
 #endif
 }
-
-/* A minimum only falls, so a time no earlier than what is already there needs no atomic. */
-inline void cs_lower_earliest(__global uint* earliest, const uint object, const uint key)
-{
-  if (key < earliest[object]) atomic_min(&earliest[object], key);
-}
-
-#define CS_NONE 0xffffffffu /* no object, or no time yet: above every time's bits */
 
 CS_DEFINE_STREAM_ITEM(uint4)
 
@@ -55,8 +36,7 @@ CS_GROUP_KERNEL void cs_earliest_toi(CS_FOUR_STREAMS(uint4), __global const uint
   uint vertex_face, mine[2] = {CS_NONE, CS_NONE}, key = 0;
   if (cs_stream_item_uint4(get_global_id(0), CS_FOUR_STREAM_ARGS, &c, &vertex_face)) {
     key = cs_contact_time_key(c);
-    mine[0] = vertex_object[vertex_face ? c.x : edges[2 * c.x]];
-    mine[1] = vertex_object[vertex_face ? faces[3 * c.y] : edges[2 * c.y]];
+    cs_pair_objects(c.xy, vertex_face, faces, edges, vertex_object, mine);
   }
   const uint lid = get_local_id(0);
   if (lid < 2) {

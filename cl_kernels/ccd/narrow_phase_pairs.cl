@@ -4,6 +4,7 @@
  * pairs it proves apart, whichever test it goes with. */
 #include "conservative.h"
 #include "cubic.h"
+#include "earliest.h"
 #include "filter.h"
 #include "pairs.h"
 #include "streams.h"
@@ -16,6 +17,33 @@ inline int cs_filtered(const cs_query* q, const uint vertex_face, const uint use
 
 CS_DEFINE_STREAM_ITEM(uint2)
 
+/* The cubic test of item i of the candidate streams: whether it is a contact to emit,
+ * and its pair, kind and time. Where `earliest` is set (a constant, so that the test
+ * without it compiles as if this were not there), the pair first skips the cubic where
+ * its features' boxes stay apart (cs_apart_until) until both its objects have a
+ * contact no later: it cannot lower either object's earliest time. */
+inline int cs_cubic_contact(const uint i, CS_FOUR_STREAMS(uint2), __global const real* x0, __global const real* x1,
+                            __global const uint* faces, __global const uint* edges, const uint exact_input,
+                            const real tolerance, const real separation, const uint use_filter, const int earliest,
+                            __global const uint* vertex_object, __global const uint* earliest_times, uint2* pair,
+                            uint* vertex_face, real* t)
+{
+  if (!cs_stream_item_uint2(i, CS_FOUR_STREAM_ARGS, pair, vertex_face)) return 0;
+  real q[24], at[3];
+  cs_pair_points(*pair, *vertex_face, x0, x1, faces, edges, q);
+  if (earliest) {
+    uint objects[2];
+    cs_pair_objects(*pair, *vertex_face, faces, edges, vertex_object, objects);
+    const real scale = cs_points_scale(q, 1);
+    const float known = as_float(max(earliest_times[objects[0]], earliest_times[objects[1]]));
+    if (cs_apart_until(q, (int)*vertex_face, cs_touching_margin(tolerance * scale, scale)) > known) return 0;
+  }
+  if (cs_cubic(q, (int)*vertex_face, tolerance, at) != CS_COLLIDES) return 0;
+  const cs_query query = cs_points_query(q, exact_input);
+  *t = at[0];
+  return !cs_filtered(&query, *vertex_face, use_filter, separation);
+}
+
 /* The cubic solver, to the end: colliding pairs are emitted as contacts of their kind.
  * A pair is a contact where the cubic finds one and the filter does not prove the pair
  * apart, so the filter runs only on the cubic's few contacts: in interval arithmetic
@@ -23,30 +51,65 @@ CS_DEFINE_STREAM_ITEM(uint2)
  * cloth-ball's tests 0.46 -> 0.40 ms, n-body's 0.83 -> 0.55). Gathering a group's
  * contacts before filtering them, as the screen does, measured slower here (n-body
  * 0.58 ms): few pairs collide. What the filter still costs is registers: 78 a
- * work-item, 63 without it, which took 0.28 ms on cloth-ball. */
-__kernel void cs_cubic_pairs(CS_FOUR_STREAMS(uint2), __global const real* x0, __global const real* x1,
-                             __global const uint* faces, __global const uint* edges, const uint exact_input,
-                             const real tolerance, const real separation, const uint use_filter,
-                             CS_EMITTER_PARAMS(uint4, vf_contacts), CS_EMITTER_PARAMS(uint4, ee_contacts))
+ * work-item, 63 without it, which took 0.28 ms on cloth-ball.
+ *
+ * In a scene of objects (CS_EARLIEST_ACROSS) the kernel takes each vertex's object and
+ * a word per object, which only cs_cubic_earliest_pairs uses. */
+#if CS_EARLIEST_ACROSS
+#define CS_OBJECT_PARAMS , __global const uint *vertex_object, __global uint *earliest
+#define CS_OBJECT_ARGS vertex_object, earliest
+#else
+#define CS_OBJECT_PARAMS
+#define CS_OBJECT_ARGS 0, 0
+#endif
+#define CS_CUBIC_PARAMS                                                                                      \
+  CS_FOUR_STREAMS(uint2), __global const real *x0, __global const real *x1, __global const uint *faces,      \
+      __global const uint *edges, const uint exact_input, const real tolerance, const real separation,       \
+      const uint use_filter CS_OBJECT_PARAMS
+
+__kernel void cs_cubic_pairs(CS_CUBIC_PARAMS, CS_EMITTER_PARAMS(uint4, vf_contacts),
+                             CS_EMITTER_PARAMS(uint4, ee_contacts))
 {
   CS_EMITTER_BEGIN(vf_contacts);
   CS_EMITTER_BEGIN(ee_contacts);
   uint2 pair;
   uint vertex_face;
-  if (cs_stream_item_uint2(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face)) {
-    real q[24], at[3];
-    cs_pair_points(pair, vertex_face, x0, x1, faces, edges, q);
-    if (cs_cubic(q, (int)vertex_face, tolerance, at) == CS_COLLIDES) {
-      const cs_query query = cs_points_query(q, exact_input);
-      if (!cs_filtered(&query, vertex_face, use_filter, separation)) {
-        if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, at[0], CS_COLLIDES));
-        else CS_EMIT(ee_contacts, cs_contact(pair, at[0], CS_COLLIDES));
-      }
-    }
+  real t;
+  if (cs_cubic_contact(get_global_id(0), CS_FOUR_STREAM_ARGS, x0, x1, faces, edges, exact_input, tolerance,
+                       separation, use_filter, 0, CS_OBJECT_ARGS, &pair, &vertex_face, &t)) {
+    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));
+    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));
   }
   CS_EMITTER_END(vf_contacts);
   CS_EMITTER_END(ee_contacts);
 }
+
+#if CS_EARLIEST_ACROSS
+/* cs_cubic_pairs in a step that reports each object's earliest time alone: the pairs
+ * that cannot lower one skip the cubic, and the contacts found lower their objects'
+ * times at once, so that the pairs after them skip more. The earliest times stay the
+ * full list's. */
+__kernel void cs_cubic_earliest_pairs(CS_CUBIC_PARAMS, CS_EMITTER_PARAMS(uint4, vf_contacts),
+                                      CS_EMITTER_PARAMS(uint4, ee_contacts))
+{
+  CS_EMITTER_BEGIN(vf_contacts);
+  CS_EMITTER_BEGIN(ee_contacts);
+  uint2 pair;
+  uint vertex_face;
+  real t;
+  if (cs_cubic_contact(get_global_id(0), CS_FOUR_STREAM_ARGS, x0, x1, faces, edges, exact_input, tolerance,
+                       separation, use_filter, 1, vertex_object, earliest, &pair, &vertex_face, &t)) {
+    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));
+    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));
+    uint objects[2];
+    cs_pair_objects(pair, vertex_face, faces, edges, vertex_object, objects);
+    cs_lower_earliest(earliest, objects[0], cs_time_key(t));
+    cs_lower_earliest(earliest, objects[1], cs_time_key(t));
+  }
+  CS_EMITTER_END(vf_contacts);
+  CS_EMITTER_END(ee_contacts);
+}
+#endif
 
 /* Whether the bounds over the whole parameter box leave a pair open. */
 inline int cs_bounds_leave_open(const uint2 pair, const uint vertex_face, __global const real* x0,

@@ -454,35 +454,50 @@ EarliestRun compare_earliest(const Scene& scene, std::size_t steps, const Detect
 // longer hold an object's earliest time (refine.cl): where a contact found for each of
 // its objects is earlier than the query's answer can be (bodies colliding at different
 // times), or where its objects already touch at time 0 (a cloth with a vertex on one
-// of its faces at the start). The times must stay the full list's, object by object.
+// of its faces at the start). The cubic test skips the pairs whose features stay apart
+// until then (narrow_phase_pairs.cl). The times must stay the full list's, object by
+// object.
 TEST_CASE("earliest times alone equal the full list's, object by object, with less refinement", "[detector][quick]")
 {
   const Scene bodies = cstreams::test::generated_scene("n-body", 24, 40);
   const Scene funnel = cstreams::test::cloth_funnel();
-  for (auto precision : {Precision::single, Precision::double_}) {
-    INFO(to_string(precision));
-    if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
-    DetectorOptions options;
-    options.solver.precision = precision;
-    const EarliestRun apart = compare_earliest(bodies, bodies.frame_count() - 1, options);
-    CHECK(apart.later > 0);
-    // In double the bodies' queries start from the times they can be coplanar at, and
-    // settle in a few rounds, before contacts found elsewhere give any of them up.
-    if (precision == Precision::single) CHECK(apart.earliest_boxes < apart.all_boxes);
-    else CHECK(apart.earliest_boxes <= apart.all_boxes);
-    if (precision == Precision::single) {
-      // The funnel starting with one vertex on a vertex of its last face: a contact at 0.
-      SceneDescription start = describe(funnel, 0);
-      std::vector<Vec3>& x = start.objects[0].positions;
-      const auto& face = start.objects[0].faces.back();
-      std::uint32_t moved = 0;
-      while (moved == face[0] || moved == face[1] || moved == face[2]) ++moved;
-      x[moved] = x[face[0]];
-      const EarliestRun touching = compare_earliest(funnel, 1, options, cstreams::test::device(), start);
-      CHECK(touching.at_zero == 1);
-      CHECK(touching.earliest_boxes < touching.all_boxes / 4);
-    }
+  // The funnel starting with one vertex on a vertex of its last face: a contact at 0.
+  SceneDescription touching_start = describe(funnel, 0);
+  {
+    std::vector<Vec3>& x = touching_start.objects[0].positions;
+    const auto& face = touching_start.objects[0].faces.back();
+    std::uint32_t moved = 0;
+    while (moved == face[0] || moved == face[1] || moved == face[2]) ++moved;
+    x[moved] = x[face[0]];
   }
+  for (auto solver : {Solver::conservative, Solver::cubic})
+    for (auto precision : {Precision::single, Precision::double_}) {
+      INFO(to_string(solver) << ", " << to_string(precision));
+      if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
+      DetectorOptions options;
+      options.solver.solver = solver;
+      options.solver.precision = precision;
+      const EarliestRun apart = compare_earliest(bodies, bodies.frame_count() - 1, options);
+      CHECK(apart.later > 0);
+      if (solver == Solver::cubic) {
+        // Which pairs skip depends on which contacts the device found first (pocl: the
+        // bodies' 42,612 contacts over their steps settle 26,495), so only the times are
+        // checked; the skip itself is tested in test_narrow_phase.
+        const EarliestRun touching = compare_earliest(funnel, 1, options, cstreams::test::device(), touching_start);
+        CHECK(touching.at_zero == 1);
+        CHECK(apart.earliest_contacts <= apart.all_contacts);
+        continue;
+      }
+      // In double the bodies' queries start from the times they can be coplanar at, and
+      // settle in a few rounds, before contacts found elsewhere give any of them up.
+      if (precision == Precision::single) CHECK(apart.earliest_boxes < apart.all_boxes);
+      else CHECK(apart.earliest_boxes <= apart.all_boxes);
+      if (precision == Precision::single) {
+        const EarliestRun touching = compare_earliest(funnel, 1, options, cstreams::test::device(), touching_start);
+        CHECK(touching.at_zero == 1);
+        CHECK(touching.earliest_boxes < touching.all_boxes / 4);
+      }
+    }
 }
 
 namespace {

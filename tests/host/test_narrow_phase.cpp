@@ -286,6 +286,122 @@ TEST_CASE("a box the refinement cuts into pieces at once is tiled by them", "[na
     }
 }
 
+namespace {
+
+// Queries whose features meet at a random time in (0, 1): a vertex through a point of
+// its moving face, or two edges through one point, the other ends moving at random.
+std::vector<Query> meeting_queries(ContactKind kind, std::size_t n, std::uint32_t seed)
+{
+  std::mt19937 rng{seed};
+  std::uniform_real_distribution<double> unit(0, 1), wide(-1, 1);
+  const auto random_point = [&] { return Vec3(wide(rng), wide(rng), wide(rng)); };
+  std::vector<Query> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = unit(rng);
+    Query q;
+    // Points 1..3 (the face, or point 1 and the second edge's ends 2, 3) move at random.
+    for (int k = 1; k < 4; ++k) {
+      q[k] = random_point();
+      q[k + 4] = q[k] + 0.5 * random_point();
+    }
+    const auto at = [&](int k) { return q[k] + t * (q[k + 4] - q[k]); };
+    const Vec3 velocity = 0.5 * random_point();
+    if (kind == ContactKind::vertex_face) {
+      double u = unit(rng), v = unit(rng);
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      const Vec3 meet = at(1) + u * (at(2) - at(1)) + v * (at(3) - at(1));
+      q[0] = meet - t * velocity;
+      q[4] = q[0] + velocity;
+    } else {
+      // Edge 0-1 passes at time t through the point of edge 2-3 at parameter u.
+      const double u = unit(rng), s = unit(rng);
+      const Vec3 meet = at(2) + u * (at(3) - at(2)), other = at(1);
+      // Point 0 at time t lies on the line from point 1 through the meeting point.
+      const Vec3 p0 = other + (meet - other) / std::max(s, 0.05);
+      q[0] = p0 - t * velocity;
+      q[4] = q[0] + velocity;
+    }
+    out.push_back(q);
+  }
+  return out;
+}
+
+// The cubic test and cs_apart_until on the same queries (tests/kernels/apart_until.cl):
+// per query, the cubic's time (2: none) and the bound.
+template <class Real>
+std::pair<std::vector<Real>, std::vector<Real>> cubic_and_bound(runtime::Context& device, const runtime::Kernel& kernel,
+                                                              ContactKind kind, const std::vector<Query>& queries,
+                                                              double tolerance)
+{
+  const std::size_t n = queries.size();
+  std::vector<Real> in(24 * n), times(n), until(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int j = 0; j < 8; ++j)
+      for (int k = 0; k < 3; ++k) in[24 * i + 3 * j + k] = Real(queries[i][j][k]);
+  runtime::Buffer queries_buffer(device, in.size() * sizeof(Real), "queries"),
+      times_buffer(device, n * sizeof(Real), "times"), until_buffer(device, n * sizeof(Real), "until");
+  device.write(queries_buffer, in.data(), in.size() * sizeof(Real));
+  kernel.set_args(queries_buffer, cl_uint(n), cl_uint(kind == ContactKind::vertex_face), Real(tolerance), times_buffer,
+                  until_buffer);
+  device.launch(kernel, n, 0);
+  device.read(times_buffer, times.data(), n * sizeof(Real));
+  device.read(until_buffer, until.data(), n * sizeof(Real));
+  return {times, until};
+}
+
+template <class Real> void check_apart_until(runtime::Context& device, const runtime::Kernel& kernel)
+{
+  std::vector<Dataset> sets = handmade();
+  const std::string funnel = cstreams::test::benchmark_path("scalable-ccd-sample/cloth-funnel");
+  for (ContactKind kind : {ContactKind::vertex_face, ContactKind::edge_edge}) {
+    sets.push_back(real_step_dataset(funnel, kind));
+    Dataset meeting;
+    meeting.name = "meeting";
+    meeting.kind = kind;
+    meeting.queries = meeting_queries(kind, 4000, kind == ContactKind::vertex_face ? 5 : 6);
+    sets.push_back(meeting);
+  }
+  const double tolerance = SolverOptions().tolerance;
+  std::size_t contacts = 0, bounded_contacts = 0, apart_through = 0;
+  for (const Dataset& d : sets) {
+    const auto [times, until] = cubic_and_bound<Real>(device, kernel, d.kind, d.queries, tolerance);
+    for (std::size_t i = 0; i < d.queries.size(); ++i) {
+      INFO(d.name << (d.kind == ContactKind::vertex_face ? " vf" : " ee") << " query " << i);
+      apart_through += until[i] > 1;
+      if (times[i] > 1) continue;
+      ++contacts;
+      bounded_contacts += until[i] > 0;
+      REQUIRE(until[i] <= times[i]);
+    }
+  }
+  INFO(contacts << " contacts, " << bounded_contacts << " of them after a time the bound gives; " << apart_through
+                << " queries apart through the step");
+  CHECK(bounded_contacts > contacts / 8);
+  CHECK(apart_through > 0);
+}
+
+}  // namespace
+
+// In steps that report earliest times alone, the cubic test skips a pair whose
+// features' boxes stay apart until its objects already have a contact no later
+// (cs_apart_until in ccd/cubic.h): the bound must never pass a contact the cubic test
+// finds, on the hard cases, a real step and queries whose features meet at any time.
+TEST_CASE("the cubic test finds no contact before the time its features' boxes stay apart until", "[narrow][quick]")
+{
+  auto& device = cstreams::test::device();
+  device.programs().add_sources(ccd_kernel_sources());
+  for (Precision p : precisions()) {
+    INFO(to_string(p));
+    SolverOptions options;
+    options.solver = Solver::cubic;
+    options.precision = p;
+    const runtime::Kernel kernel =
+        device.programs().kernel("kernels/apart_until.cl", "test_apart_until", solver_build_options(options));
+    if (p == Precision::double_) check_apart_until<double>(device, kernel);
+    else check_apart_until<float>(device, kernel);
+  }
+}
+
 TEST_CASE("without 64-bit atomics the conservative solver in double precision rounds its times down to float",
           "[narrow][quick]")
 {

@@ -35,8 +35,8 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
               o.front.c_str());
   std::printf("steps     %zu (frames %zu to %zu)\n", last - first, first, last);
   if (o.earliest_only)
-    std::printf("contacts  %zu settled on the device (--earliest-only reads none back, and the conservative solver "
-                "leaves pairs that cannot be an object's earliest unsettled)\n",
+    std::printf("contacts  %zu settled on the device (--earliest-only reads none back, and leaves pairs that cannot "
+                "be an object's earliest unsettled)\n",
                 report.contact_count);
   else
     std::printf("contacts  %zu\n", report.contacts.size());

@@ -83,7 +83,8 @@ struct DetectorOptions {
 enum class Report {
   contacts,     // every contact (and the earliest time per object)
   // Only the earliest time of impact per object, the very one the full list gives; the
-  // conservative solver then stops refining pairs that cannot hold one.
+  // solvers then leave unsettled the pairs that cannot hold one (the conservative
+  // refinement gives them up, the cubic test skips them).
   earliest_toi
 };
 
@@ -93,8 +94,8 @@ struct DetectorStats {
   std::uint32_t front_level_cap = 0;  // deepest level the front may hold (deferred)
   unsigned front_retries = 0;       // runs repeated at a coarser front to fit the budget
   std::size_t triangle_pairs = 0, vf_candidates = 0, ee_candidates = 0;
-  // With Report::earliest_toi, the conservative solver settles only the pairs that may
-  // hold an object's earliest time, and this counts their contacts alone.
+  // With Report::earliest_toi, the solvers settle only the pairs that may hold an
+  // object's earliest time, and this counts their contacts alone.
   std::size_t contacts = 0;
   double host_ms = 0;               // wall time of the last detect(), uploads and readbacks included
   unsigned launches = 0;            // kernel launches of the last detect(), every one

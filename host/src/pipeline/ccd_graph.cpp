@@ -303,7 +303,11 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   const std::vector<std::pair<StreamId, ContactKind>> contacts = {{vf, ContactKind::vertex_face},
                                                                   {ee, ContactKind::edge_edge}};
   if (solver.solver == Solver::cubic) {
-    auto& test = g.pass("test candidates", {screen, "cs_cubic_pairs", options})
+    // In a scene of objects, in the steps that report earliest times alone, the test
+    // lowers each object's time itself and skips the pairs that cannot lower it.
+    const bool objects = in.earliest != StreamId{};
+    const std::string cubic_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "");
+    auto& test = g.pass("test candidates", {screen, "cs_cubic_pairs", cubic_options})
                      .emit(vf)
                      .emit(ee)
                      .emits_in_any_order()
@@ -311,6 +315,11 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     over_streams(test, in.candidates, "the cubic solver");
     real(real(geometry_args(test, in, solver.precision), solver.tolerance), solver.min_separation)
         .arg(value_of(cl_uint(solver.filter)));
+    if (objects)
+      test.instead_while(in.earliest_only, "cs_cubic_earliest_pairs")
+          .lower(in.earliest)
+          .arg(buffer_of(in.vertex_object))
+          .arg(buffer_of(in.earliest));
     return contacts;
   }
   // The conservative solver refines what its screen leaves open as one work list, so
@@ -570,23 +579,26 @@ struct GraphBuilder {
     if (s.kept_ee != runtime::StreamId{}) in.candidates.emplace_back(s.kept_ee, ContactKind::edge_edge);
     s.vertex_object = g.fixed("vertex objects", 4, t.vertex_count);
     s.earliest_only = g.param("earliest only", 4);
-    if (solver.solver == Solver::conservative) {
+    s.earliest = g.fixed("earliest toi", 4, l.slots.size());
+    in.vertex_object = s.vertex_object;
+    in.earliest_only = s.earliest_only;
+    if (solver.solver == Solver::cubic) {
+      in.earliest = s.earliest;
+    } else {
       s.object_contacts = g.fixed("earliest contact found", 8, l.slots.size());
-      in.vertex_object = s.vertex_object;
       in.object_contacts = s.object_contacts;
-      in.earliest_only = s.earliest_only;
     }
     s.contacts = add_elementary_tests(g, in, solver, device, [this](std::size_t guess) { return sized(guess); });
   }
 
-  // The earliest time of impact per object, by an atomic minimum over the contacts, in
-  // the steps that report nothing else: where the contacts come back, the host takes
-  // the minimum from them if asked (Detector::earliest_toi), and the step is two
-  // launches shorter.
+  // The earliest time of impact per object, in the steps that report nothing else:
+  // where the contacts come back, the host takes the minimum from them if asked
+  // (Detector::earliest_toi), and the step is shorter by these launches. The cubic
+  // test lowers the times itself (add_elementary_tests); after the conservative
+  // refinement, an atomic minimum over the contacts does.
   void earliest_toi()
   {
     using namespace runtime;
-    s.earliest = g.fixed("earliest toi", 4, l.slots.size());
     const char* earliest = "ccd/earliest.cl";
     const std::string time_options = "-DCS_REAL_DOUBLE=" + std::to_string(int(exact_input));
     g.pass("clear earliest toi", {earliest, "cs_clear_earliest", time_options})
@@ -595,6 +607,7 @@ struct GraphBuilder {
         .only_while(s.earliest_only)
         .arg(value_of(cl_uint(l.slots.size())))
         .arg(buffer_of(s.earliest));
+    if (solver.solver == Solver::cubic) return;
     auto& pass = g.pass("earliest toi", {earliest, "cs_earliest_toi", time_options})
                      .update(s.earliest)
                      .only_while(s.earliest_only);

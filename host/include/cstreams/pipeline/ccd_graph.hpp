@@ -122,11 +122,13 @@ struct TestInputs {
   runtime::StreamId x0_float, x1_float;
   runtime::ParamId exact_floats;
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
-  // A scene of objects: every vertex's object, two words per object, and a 4-byte
-  // parameter. Where the parameter is nonzero, the step reports only each object's
-  // earliest time, and the conservative refinement gives up the queries that cannot
-  // hold one (refine.cl). Unset where pairs belong to no objects.
-  runtime::StreamId vertex_object, object_contacts;
+  // A scene of objects: every vertex's object, and a 4-byte parameter. Where the
+  // parameter is nonzero, the step reports only each object's earliest time: the
+  // conservative refinement gives up the queries that cannot hold one, keeping two
+  // words per object (object_contacts, refine.cl), and the cubic test lowers each
+  // object's time (earliest, a word per object) and skips the pairs that cannot lower
+  // it (narrow_phase_pairs.cl). Unset where pairs belong to no objects.
+  runtime::StreamId vertex_object, object_contacts, earliest;
   runtime::ParamId earliest_only;
 };
 
