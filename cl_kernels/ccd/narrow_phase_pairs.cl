@@ -67,21 +67,37 @@ inline int cs_cubic_contact(const uint i, CS_FOUR_STREAMS(uint2), __global const
       __global const uint *edges, const uint exact_input, const real tolerance, const real separation,       \
       const uint use_filter CS_OBJECT_PARAMS
 
+/* Lowers the earliest times of pair p's objects to t. */
+inline void cs_lower_objects(const uint2 p, const uint vertex_face, __global const uint* faces,
+                             __global const uint* edges, const real t, __global const uint* vertex_object,
+                             __global uint* earliest)
+{
+  uint objects[2];
+  cs_pair_objects(p, vertex_face, faces, edges, vertex_object, objects);
+  cs_lower_earliest(earliest, objects[0], cs_time_key(t));
+  cs_lower_earliest(earliest, objects[1], cs_time_key(t));
+}
+
+/* Both kernels' body; `earliest` is the constant 0 or 1 that cs_cubic_contact takes. */
+#define CS_CUBIC_PAIRS_BODY(earliest)                                                                      \
+  CS_EMITTER_BEGIN(vf_contacts);                                                                           \
+  CS_EMITTER_BEGIN(ee_contacts);                                                                           \
+  uint2 pair;                                                                                              \
+  uint vertex_face;                                                                                        \
+  real t;                                                                                                  \
+  if (cs_cubic_contact(get_global_id(0), CS_FOUR_STREAM_ARGS, x0, x1, faces, edges, exact_input, tolerance, \
+                       separation, use_filter, earliest, CS_OBJECT_ARGS, &pair, &vertex_face, &t)) {       \
+    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));                               \
+    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));                                           \
+    if (earliest) cs_lower_objects(pair, vertex_face, faces, edges, t, CS_OBJECT_ARGS);                    \
+  }                                                                                                        \
+  CS_EMITTER_END(vf_contacts);                                                                             \
+  CS_EMITTER_END(ee_contacts)
+
 __kernel void cs_cubic_pairs(CS_CUBIC_PARAMS, CS_EMITTER_PARAMS(uint4, vf_contacts),
                              CS_EMITTER_PARAMS(uint4, ee_contacts))
 {
-  CS_EMITTER_BEGIN(vf_contacts);
-  CS_EMITTER_BEGIN(ee_contacts);
-  uint2 pair;
-  uint vertex_face;
-  real t;
-  if (cs_cubic_contact(get_global_id(0), CS_FOUR_STREAM_ARGS, x0, x1, faces, edges, exact_input, tolerance,
-                       separation, use_filter, 0, CS_OBJECT_ARGS, &pair, &vertex_face, &t)) {
-    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));
-    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));
-  }
-  CS_EMITTER_END(vf_contacts);
-  CS_EMITTER_END(ee_contacts);
+  CS_CUBIC_PAIRS_BODY(0);
 }
 
 #if CS_EARLIEST_ACROSS
@@ -92,22 +108,7 @@ __kernel void cs_cubic_pairs(CS_CUBIC_PARAMS, CS_EMITTER_PARAMS(uint4, vf_contac
 __kernel void cs_cubic_earliest_pairs(CS_CUBIC_PARAMS, CS_EMITTER_PARAMS(uint4, vf_contacts),
                                       CS_EMITTER_PARAMS(uint4, ee_contacts))
 {
-  CS_EMITTER_BEGIN(vf_contacts);
-  CS_EMITTER_BEGIN(ee_contacts);
-  uint2 pair;
-  uint vertex_face;
-  real t;
-  if (cs_cubic_contact(get_global_id(0), CS_FOUR_STREAM_ARGS, x0, x1, faces, edges, exact_input, tolerance,
-                       separation, use_filter, 1, vertex_object, earliest, &pair, &vertex_face, &t)) {
-    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));
-    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));
-    uint objects[2];
-    cs_pair_objects(pair, vertex_face, faces, edges, vertex_object, objects);
-    cs_lower_earliest(earliest, objects[0], cs_time_key(t));
-    cs_lower_earliest(earliest, objects[1], cs_time_key(t));
-  }
-  CS_EMITTER_END(vf_contacts);
-  CS_EMITTER_END(ee_contacts);
+  CS_CUBIC_PAIRS_BODY(1);
 }
 #endif
 
