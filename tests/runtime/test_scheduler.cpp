@@ -718,6 +718,77 @@ TEST_CASE("a pass that emits lowers a fixed stream to minimums, after its writer
   }
 }
 
+// A fixed stream read back as a run ends (Scheduler::read_after_run): where every pass
+// that writes it runs before the run's last counter read, it comes back with that read
+// (no blocking read of its own), after the reruns that lower it again; else it is read
+// once the run is done. Either way the read is for that run alone. The caller's work
+// given for counter reads (Scheduler::on_counter_read) runs before each of them.
+TEST_CASE("a stream read after a run comes back with its last counter read, after the reruns that write it",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 10007, m = 61;
+  StreamGraph g;
+  auto values = g.fixed("values", 4, n);
+  auto least = g.fixed("least", 4, m), copied = g.fixed("copied", 4, m);
+  auto pairs = g.variable("pairs", 8, 16);
+  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(least).arg(value_of(cl_uint(m))).arg(buffer_of(least));
+  g.pass("expand", {program, "test_expand_lowering"})
+      .launch_over(values)
+      .emit(pairs)
+      .lower(least)
+      .arg(buffer_of(values))
+      .arg(count_of(values))
+      .arg(value_of(cl_uint(m)))
+      .arg(buffer_of(least));
+  // Behind the pairs, in a stage with no counters to read: nothing brings `copied` back
+  // but a read of its own.
+  g.pass("copy", {program, "test_copy"}).launch_items(m).read(least).read(pairs).write(copied).arg(buffer_of(least))
+      .arg(value_of(cl_uint(m))).arg(buffer_of(copied));
+  const auto v = random_values(n, 31);
+  std::vector<std::uint32_t> expected(m, 0xffffffffu);
+  for (std::uint32_t x : v) expected[x % m] = std::min(expected[x % m], cstreams::test::test_hash(x));
+  // Blocking reads of a first run from a new scheduler, with the given reads after it.
+  const auto first_run = [&](Registration registration, const std::vector<std::pair<StreamId, std::vector<std::uint32_t>*>>& reads) {
+    Scheduler s(ctx, g, {registration, true});
+    s.upload(values, v);
+    for (auto& [stream, host] : reads) s.read_after_run(stream, host->data(), host->size());
+    const std::uint64_t before = ctx.blocking_reads();
+    s.run();
+    REQUIRE(s.stats().passes.at(1).name == "expand");
+    CHECK(s.stats().passes.at(1).reruns > 0);
+    return ctx.blocking_reads() - before;
+  };
+  for (auto registration : {Registration::lock_free, Registration::segmented_lock}) {
+    INFO(to_string(registration));
+    const std::uint64_t alone = first_run(registration, {});
+    std::vector<std::uint32_t> lowered(m, 7), copy(m, 7);
+    CHECK(first_run(registration, {{least, &lowered}}) == alone);
+    CHECK(lowered == expected);
+    CHECK(first_run(registration, {{copied, &copy}}) == alone + 1);
+    CHECK(copy == expected);
+
+    Scheduler s(ctx, g, {registration, true});
+    s.upload(values, v);
+    std::vector<std::uint32_t> once(m, 7);
+    s.read_after_run(least, once.data(), m);
+    // The caller's work before each counter read: as many as the run made.
+    unsigned before_reads = 0;
+    s.on_counter_read([&] { ++before_reads; });
+    s.run();
+    CHECK(before_reads == s.stats().readbacks);
+    CHECK(before_reads > 1);
+    CHECK(once == expected);
+    std::fill(once.begin(), once.end(), 7u);
+    s.run();
+    CHECK(once == std::vector<std::uint32_t>(m, 7u));
+  }
+  Scheduler s(ctx, g);
+  std::vector<std::uint32_t> too_many(m + 1);
+  CHECK_THROWS_WITH(s.read_after_run(least, too_many.data(), m + 1), Catch::Contains("which holds 61"));
+  CHECK_THROWS_WITH(s.read_after_run(pairs, too_many.data(), 1), Catch::Contains("variable-length"));
+}
+
 // A pass launches another kernel of its program while a parameter is set
 // (PassSpec::instead_while), with the same arguments, and its own again once it is not.
 TEST_CASE("a pass launches its variant kernel while its parameter is set", "[runtime][scheduler][quick]")

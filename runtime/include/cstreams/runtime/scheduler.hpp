@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -108,6 +109,13 @@ public:
   // uploading to a variable stream sets its count (growing it if needed).
   void upload(StreamId stream, const void* items, std::size_t count);
   void download(StreamId stream, void* items, std::size_t count) const;
+  // Reads the first `count` items of a fixed stream into `items` as the next run that
+  // completes ends (a run that throws, a stop say, leaves the read to the next one):
+  // queued ahead of the run's last counter read where every pass that writes the
+  // stream has run by then, so that they come back without a round trip of their own,
+  // else read once the run is done. `items` must stay valid until then; only a run
+  // that completes writes them.
+  void read_after_run(StreamId stream, void* items, std::size_t count);
   template <class T> void upload(StreamId s, const std::vector<T>& items) { upload(s, items.data(), items.size()); }
   template <class T> std::vector<T> download(StreamId s) const
   {
@@ -138,6 +146,12 @@ public:
   // Exchanges two streams' buffers and counts (ping-pong between runs).
   void swap(StreamId a, StreamId b);
   const Buffer& buffer(StreamId stream) const;
+
+  // Called on the run's thread before each blocking read of a stage's counters, while
+  // the device works through the stage: host work of the caller's that would otherwise
+  // wait for the run to end and then stand between it and the next (queueing uploads
+  // for the next run). It must not touch this scheduler's streams' sizes.
+  void on_counter_read(std::function<void()> work);
 
   void set(ParamId param, const void* bytes, std::size_t size);
   template <class T> void set(ParamId p, const T& value) { set(p, &value, sizeof(T)); }
