@@ -981,6 +981,58 @@ TEST_CASE("positions uploaded ahead give the contacts of positions set before ea
   }
 }
 
+// A repeated step uploads both its ends ahead (upload_ahead(object, start, end)), and
+// a step that follows one uploaded ahead starts from its end without a copy: runs of
+// each step, uploaded ahead, must give the contacts and earliest times of the same
+// positions set before each run. One body is given only its ends, so it starts where
+// the run before left it.
+TEST_CASE("a repeated step uploaded ahead, both ends, gives the contacts of its ends set before each run",
+          "[detector][quick]")
+{
+  const Scene bodies = cstreams::test::generated_scene("n-body", 6, 40);
+  const std::size_t steps = bodies.frame_count() - 1;
+  const std::uint32_t ends_only = 1;
+  const auto moving = [&](std::uint32_t o) { return bodies.objects[o].kind != ObjectKind::static_; };
+  const unsigned runs = 3;
+  // The positions of every run, in order: each step `runs` times.
+  std::vector<Step> order;
+  for (std::size_t f = 0; f < steps; ++f)
+    for (unsigned r = 0; r < runs; ++r) order.push_back(load_step(bodies, f));
+  for (auto precision : {Precision::single, Precision::double_}) {
+    INFO(to_string(precision));
+    if (precision == Precision::double_ && !cstreams::test::device().device().fp64) continue;
+    DetectorOptions options;
+    options.solver.precision = precision;
+    Detector set(cstreams::test::device(), describe(bodies, 0), options),
+        ahead(cstreams::test::device(), describe(bodies, 0), options);
+    std::size_t contacts = 0;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      INFO("run " << k);
+      const Step& now = order[k];
+      for (std::uint32_t o = 0; o < bodies.objects.size(); ++o) {
+        if (!moving(o)) continue;
+        if (o == ends_only) set.set_positions(o, now.x1[o]);
+        else set.set_step(o, now.x0[o], now.x1[o]);
+        if (k == 0) ahead.set_positions(o, now.x1[o]);
+        if (k + 1 == order.size()) continue;
+        const Step& next = order[k + 1];
+        if (o == ends_only) ahead.upload_ahead(o, next.x1[o]);
+        else ahead.upload_ahead(o, next.x0[o], next.x1[o]);
+      }
+      if (k + 1 < order.size())
+        CHECK_THROWS_AS(ahead.upload_ahead(0, order[k + 1].x0[0], std::vector<Vec3>(3)), InputError);
+      const Report report = k % 4 == 3 ? Report::earliest_toi : Report::contacts;
+      set.detect(report);
+      ahead.detect(report);
+      CHECK(set.earliest_toi() == ahead.earliest_toi());
+      if (report == Report::earliest_toi) continue;
+      check_same_contacts(set.contacts(), ahead.contacts());
+      contacts += set.contacts().size();
+    }
+    CHECK(contacts > 0);
+  }
+}
+
 // Positions given object by object are gathered and go up as the step starts, one write
 // per run of adjacent objects. Given in slot order they make one run; given backwards,
 // some twice (the first a wrong frame) and some through set_step(), every object is a

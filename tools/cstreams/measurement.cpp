@@ -84,8 +84,8 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
   cmd.add_flag("--no-profile", o.no_profile,
                "Record no kernel timings: device times are unknown, wall times leave out what timing costs the host");
   cmd.add_flag("--no-upload-ahead", o.no_upload_ahead,
-               "Upload each step's positions just before it runs, not while the step before runs (steps in a row, "
-               "without --repeat)");
+               "Upload each step's positions just before it runs, not while the step before runs (or the run "
+               "before it, with --repeat)");
 }
 
 DetectorOptions detector_options(const MeasureOptions& o)
@@ -103,7 +103,7 @@ DetectorOptions detector_options(const MeasureOptions& o)
   return options;
 }
 
-bool uploads_ahead(const MeasureOptions& o) { return o.repeat == 1 && !o.no_upload_ahead; }
+bool uploads_ahead(const MeasureOptions& o) { return !o.no_upload_ahead; }
 
 void check(const MeasureOptions& o)
 {
@@ -168,13 +168,18 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     DetectorStats stats;
     for (unsigned r = 0; r < o.repeat; ++r) {
       const auto started = std::chrono::steady_clock::now();
+      // Steps that follow each other need only the new end; a repeated step both. Ahead,
+      // each run uploads what the run after it needs: the first run of the first step
+      // alone has its positions given before it.
+      const bool given_ahead = ahead && (r > 0 || frame != first);
       for (std::uint32_t obj = 0; obj < scene.objects.size(); ++obj) {
         if (scene.objects[obj].kind == ObjectKind::static_) continue;
-        // Steps that follow each other need only the new end (uploaded ahead, after the
-        // first); a repeated step both.
-        if (r > 0) detector.set_step(obj, step.x0[obj], step.x1[obj]);
-        else if (!ahead || frame == first) detector.set_positions(obj, step.x1[obj]);
-        if (next) detector.upload_ahead(obj, next->x1[obj]);
+        if (!given_ahead) {
+          if (r > 0) detector.set_step(obj, step.x0[obj], step.x1[obj]);
+          else detector.set_positions(obj, step.x1[obj]);
+        }
+        if (ahead && r + 1 < o.repeat) detector.upload_ahead(obj, step.x0[obj], step.x1[obj]);
+        else if (next) detector.upload_ahead(obj, next->x1[obj]);
       }
       detector.detect(o.earliest_only ? Report::earliest_toi : Report::contacts);
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();

@@ -38,8 +38,8 @@ struct MeasureOptions {
   // Record no OpenCL profiling events: device times unknown, and the wall time without
   // what the events cost the host.
   bool no_profile = false;
-  // Steps in a row (no repeats): upload each step's positions before it runs, rather
-  // than while the step before runs (Detector::upload_ahead).
+  // Upload each step's positions before it runs, rather than while the step (or the
+  // run of a repeated step) before it runs (Detector::upload_ahead).
   bool no_upload_ahead = false;
 };
 
@@ -48,8 +48,8 @@ void add_measure_options(CLI::App& command, MeasureOptions& o);
 // Checks them (InputError naming the flag), without reading the scene.
 void check(const MeasureOptions& o);
 DetectorOptions detector_options(const MeasureOptions& o);
-// Whether each step's positions upload while the step before runs: steps in a row (no
-// repeats), unless --no-upload-ahead.
+// Whether each step's positions upload while the step before runs (or the run before,
+// of a repeated step): unless --no-upload-ahead.
 bool uploads_ahead(const MeasureOptions& o);
 
 double median(std::vector<double> v);

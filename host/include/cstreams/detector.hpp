@@ -14,7 +14,8 @@
 //   }
 //
 // Replaying recorded frames, upload_ahead(cloth, frame[n + 1]) before the detect() of
-// step n (ending at frame n) lets that upload overlap the step.
+// step n (ending at frame n) lets that upload overlap the step, and the step hands its
+// end to the next one without a copy.
 #include <cstreams/contacts.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
@@ -141,6 +142,11 @@ public:
   // Objects given none stay where that step leaves them; set_positions() afterwards
   // still replaces them, and a second call before the next detect() this one.
   void upload_ahead(std::uint32_t object, const std::vector<Vec3>& end);
+  // Both ends of the step after the next (repeating a step, or starting it elsewhere
+  // than where the next one ends), uploaded ahead as upload_ahead(object, end); both
+  // are read until the next detect() returns. Objects given no start this way start
+  // where the next step leaves them.
+  void upload_ahead(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end);
 
   // A failure on the device part-way through a step (memory exhausted, a lost device)
   // is thrown as runtime::Error and leaves the detector refusing every further call

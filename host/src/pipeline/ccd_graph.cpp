@@ -422,11 +422,13 @@ struct GraphBuilder {
     s.x0 = g.fixed("x0", 12, nv);
     s.x1 = g.fixed("x1", 12, nv);
     s.x_next = g.fixed("x next", 12, 0);
+    s.x0_next = g.fixed("x0 next", 12, 0);
     s.exact_floats = g.param("positions are floats", 4);
     if (exact_input) {
       s.x0_double = g.fixed("x0 double", 24, nv);
       s.x1_double = g.fixed("x1 double", 24, nv);
       s.x_next_double = g.fixed("x next double", 24, 0);
+      s.x0_next_double = g.fixed("x0 next double", 24, 0);
     }
     s.faces = g.fixed("faces", 12, nf);
     s.edges = g.fixed("edges", 8, ne);

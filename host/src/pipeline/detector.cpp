@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <future>
+#include <optional>
 #include <map>
 
 namespace cstreams {
@@ -103,6 +104,7 @@ struct Detector::State {
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});
     start_exact = end_exact = upload_scene(*scheduler, g, layout, scene, options.solver.min_separation);
+    scheduler->on_counter_read([this] { queue_uploads_ahead(false); });
     if (!has(streams.front)) return;
     front.install(*scheduler, streams, seeds);
   }
@@ -128,17 +130,38 @@ struct Detector::State {
   // step that runs (their events, once the task is done) and of the last one (which
   // may still read the copies); and when the buffers they go to are no longer read.
   struct Ahead {
-    runtime::HostStaging single, exact;
-    std::vector<const std::vector<Vec3>*> ends;  // per object; null: none
+    // The step's ends, or its starts: where they go and the pinned copies they go from.
+    struct Side {
+      runtime::StreamId single, exact;
+      runtime::HostStaging single_copy, exact_copy;
+      std::vector<const std::vector<Vec3>*> given;  // per object; null: none
+      bool any() const
+      {
+        return std::any_of(given.begin(), given.end(), [](const auto* x) { return x != nullptr; });
+      }
+    };
+    Side ends, starts;
+    // Adjacent vertices of one side given ahead.
+    struct Run {
+      const Side* side;
+      std::size_t first, count;
+    };
     struct Uploads {
-      std::vector<runtime::Handle<cl_event>> events;
-      std::vector<bool> floats;  // per object given positions: whether they are floats
+      std::vector<Run> runs;
+      // Per object given positions: whether they are floats.
+      std::vector<bool> end_floats, start_floats;
+      std::vector<runtime::Handle<cl_event>> events;  // once queued
     };
     std::future<Uploads> uploading;
+    std::optional<Uploads> rounded;  // the task's, once its uploads are queued
     std::vector<runtime::Handle<cl_event>> taken;
     runtime::Handle<cl_event> free;
   } ahead;
   bool have_contacts = false;
+  // An earliest-only step's times, as float bits per object: they come back with the
+  // step's last counter read (Scheduler::read_after_run).
+  std::vector<std::uint32_t> earliest_bits;
+  bool have_earliest = false;
   DetectorStats stats;
   // Why a step failed part-way on the device (its streams, front and positions are then
   // in an unknown state); empty while the detector is usable.
@@ -180,93 +203,153 @@ struct Detector::State {
     end_exact[o] = r1.exact;
   }
 
-  void upload_ahead(std::uint32_t o, const std::vector<Vec3>& x)
+  // The first upload ahead to a side gives its buffers the vertices: a static object's
+  // never change, and those of moving objects given none are copied in after each step.
+  void prepare_ahead(Ahead::Side& side, runtime::StreamId single, runtime::StreamId exact)
   {
     runtime::Scheduler& q = *scheduler;
     const std::size_t n = q.count(streams.x1);
-    // The first upload ahead gives the buffers their vertices: a static object's never
-    // change, and those of moving objects given none are copied in after each step.
-    if (q.count(streams.x_next) != n) {
-      q.resize(streams.x_next, n);
-      q.copy(streams.x1, 0, streams.x_next, 0, n);
-      runtime::ensure_capacity(context, ahead.single, n * 3 * sizeof(float), "positions uploaded ahead");
-      if (has(streams.x_next_double)) {
-        q.resize(streams.x_next_double, n);
-        q.copy(streams.x1_double, 0, streams.x_next_double, 0, n);
-        runtime::ensure_capacity(context, ahead.exact, n * sizeof(Vec3), "positions uploaded ahead");
-      }
-      ahead.ends.assign(scene.objects.size(), nullptr);
-      ahead.free = context.marker();
+    if (q.count(single) == n) return;
+    side.single = single;
+    side.exact = exact;
+    q.resize(single, n);
+    q.copy(streams.x1, 0, single, 0, n);
+    runtime::ensure_capacity(context, side.single_copy, n * 3 * sizeof(float), "positions uploaded ahead");
+    if (has(exact)) {
+      q.resize(exact, n);
+      q.copy(streams.x1_double, 0, exact, 0, n);
+      runtime::ensure_capacity(context, side.exact_copy, n * sizeof(Vec3), "positions uploaded ahead");
     }
-    ahead.ends[o] = &x;
+    side.given.assign(scene.objects.size(), nullptr);
+    ahead.free = context.marker();
+  }
+
+  void upload_ahead(std::uint32_t o, const std::vector<Vec3>* start, const std::vector<Vec3>& end)
+  {
+    prepare_ahead(ahead.ends, streams.x_next, streams.x_next_double);
+    if (start) prepare_ahead(ahead.starts, streams.x0_next, streams.x0_next_double);
+    ahead.ends.given[o] = &end;
+    if (!ahead.starts.given.empty()) ahead.starts.given[o] = start;
+  }
+
+  // Rounds the positions given to one side into its pinned copies, where the vertices
+  // go, so that runs of adjacent vertices there go up in one write each; returns per
+  // object whether they were floats, and adds the side's runs to `runs`.
+  std::vector<bool> round_side(const Ahead::Side& side, std::vector<Ahead::Run>& runs) const
+  {
+    std::vector<bool> floats(side.given.size(), false);
+    if (!side.any()) return floats;
+    std::vector<Ahead::Run> own;  // joined within the side alone
+    for (const ObjectSlot& slot : layout.slots) {
+      const std::vector<Vec3>* x = side.given[slot.object];
+      if (!x) continue;
+      const std::size_t first = slot.first_vertex;
+      floats[slot.object] = round_to_float(*x, static_cast<float*>(side.single_copy.data()) + 3 * first,
+                                           has(side.exact) ? static_cast<Vec3*>(side.exact_copy.data()) + first
+                                                           : nullptr)
+                                .exact;
+      append_run(own, Ahead::Run{&side, first, x->size()});
+    }
+    runs.insert(runs.end(), own.begin(), own.end());
+    return floats;
   }
 
   // As a step starts: a task rounds the positions given ahead into the pinned copies
-  // and uploads them while the step runs; the host's copying, as long as the upload
-  // (27 MB of 1.5M triangles in double), is off the step's path too.
+  // while the step runs, so that the host's copying (27 MB of 1.5M triangles in double)
+  // is off the step's path. It makes no OpenCL call: one from a second thread waited
+  // for the step's blocking reads and slowed the launches after them (an H200's
+  // cloth-ball step, 0.12 ms).
   void start_uploads_ahead()
   {
-    if (std::none_of(ahead.ends.begin(), ahead.ends.end(), [](const auto* x) { return x != nullptr; })) return;
+    if (!ahead.ends.any()) return;
     // The copies are written again once the last step's uploads (long done) are.
     context.block_until(ahead.taken);
     ahead.taken.clear();
-    const runtime::Buffer single = scheduler->buffer(streams.x_next);
-    const runtime::Buffer exact =
-        has(streams.x_next_double) ? scheduler->buffer(streams.x_next_double) : runtime::Buffer();
-    ahead.uploading = std::async(std::launch::async, [this, single, exact] {
+    ahead.uploading = std::async(std::launch::async, [this] {
       Ahead::Uploads uploads;
-      uploads.floats.assign(ahead.ends.size(), false);
-      // The copies sit where the vertices go, so runs of adjacent vertices there go up
-      // in one write each.
-      struct Run {
-        std::size_t first, count;
-      };
-      std::vector<Run> runs;
-      for (const ObjectSlot& slot : layout.slots) {
-        const std::vector<Vec3>* x = ahead.ends[slot.object];
-        if (!x) continue;
-        const std::size_t first = slot.first_vertex;
-        uploads.floats[slot.object] =
-            round_to_float(*x, static_cast<float*>(ahead.single.data()) + 3 * first,
-                           exact ? static_cast<Vec3*>(ahead.exact.data()) + first : nullptr)
-                .exact;
-        append_run(runs, Run{first, x->size()});
-      }
-      const std::size_t vertex = 3 * sizeof(float);
-      for (const Run& r : runs) {
-        uploads.events.push_back(context.write_ahead(single, static_cast<float*>(ahead.single.data()) + 3 * r.first,
-                                                     r.count * vertex, r.first * vertex, ahead.free));
-        if (exact)
-          uploads.events.push_back(context.write_ahead(exact, static_cast<Vec3*>(ahead.exact.data()) + r.first,
-                                                       r.count * sizeof(Vec3), r.first * sizeof(Vec3), ahead.free));
-      }
+      uploads.end_floats = round_side(ahead.ends, uploads.runs);
+      uploads.start_floats = round_side(ahead.starts, uploads.runs);
       return uploads;
     });
   }
 
-  // After a step: the positions uploaded ahead become the ends of the next one, where
-  // the objects given none stay.
-  void take_uploads_ahead()
+  // Queues the uploads of the positions rounded ahead on the context's second queue:
+  // at a counter read of the step where the task is done by then (the device is busy,
+  // and the upload overlaps the rest of the step), else as the step ends (`wait`).
+  void queue_uploads_ahead(bool wait)
   {
-    if (!ahead.uploading.valid()) return;
-    runtime::Scheduler& q = *scheduler;
-    Ahead::Uploads uploads = ahead.uploading.get();
-    context.wait_for(uploads.events);
-    for (std::uint32_t o = 0; o < ahead.ends.size(); ++o)
-      if (ahead.ends[o]) end_exact[o] = uploads.floats[o];
-    for (const ObjectSlot& slot : layout.slots) {
-      if (!slot.moving || ahead.ends[slot.object]) continue;
-      const std::size_t count = scene.objects[slot.object].positions.size();
-      q.copy(streams.x1, slot.first_vertex, streams.x_next, slot.first_vertex, count);
-      if (has(streams.x_next_double))
-        q.copy(streams.x1_double, slot.first_vertex, streams.x_next_double, slot.first_vertex, count);
+    if (!ahead.uploading.valid() || ahead.rounded) return;
+    if (!wait && ahead.uploading.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    ahead.rounded = ahead.uploading.get();
+    const std::size_t vertex = 3 * sizeof(float);
+    for (const Ahead::Run& r : ahead.rounded->runs) {
+      const Ahead::Side& side = *r.side;
+      ahead.rounded->events.push_back(
+          context.write_ahead(scheduler->buffer(side.single), static_cast<float*>(side.single_copy.data()) + 3 * r.first,
+                              r.count * vertex, r.first * vertex, ahead.free));
+      if (has(side.exact))
+        ahead.rounded->events.push_back(context.write_ahead(
+            scheduler->buffer(side.exact), static_cast<Vec3*>(side.exact_copy.data()) + r.first,
+            r.count * sizeof(Vec3), r.first * sizeof(Vec3), ahead.free));
     }
-    q.swap(streams.x1, streams.x_next);
-    if (has(streams.x_next_double)) q.swap(streams.x1_double, streams.x_next_double);
-    // The next uploads go to the buffer the step's end was in, once nothing reads it.
+  }
+
+  // Where a side's buffers lack objects given none ahead, they take them from this
+  // step's end: so they stay where the step left them.
+  void fill_in_ahead(const Ahead::Side& side)
+  {
+    runtime::Scheduler& q = *scheduler;
+    for (const ObjectSlot& slot : layout.slots) {
+      if (!slot.moving || side.given[slot.object]) continue;
+      const std::size_t count = scene.objects[slot.object].positions.size();
+      q.copy(streams.x1, slot.first_vertex, side.single, slot.first_vertex, count);
+      if (has(side.exact)) q.copy(streams.x1_double, slot.first_vertex, side.exact, slot.first_vertex, count);
+    }
+  }
+
+  // Two position streams exchange buffers, with their float and exact twins.
+  void swap_positions(runtime::StreamId a, runtime::StreamId a_exact, runtime::StreamId b, runtime::StreamId b_exact)
+  {
+    scheduler->swap(a, b);
+    if (has(a_exact)) scheduler->swap(a_exact, b_exact);
+  }
+
+  // After a step, the next one starts where it ended. Without uploads ahead the end is
+  // copied into the starts. With them, buffers change places instead, and no copy
+  // stands between the step and its return: the end becomes the start, the positions
+  // uploaded ahead the next ends (or both ends, given with their starts), and the old
+  // start takes the next uploads once the step no longer reads it.
+  void end_step()
+  {
+    runtime::Scheduler& q = *scheduler;
+    if (!ahead.uploading.valid() && !ahead.rounded) {
+      q.copy(streams.x1, 0, streams.x0, 0, layout.moving_vertices);
+      if (has(streams.x1_double)) q.copy(streams.x1_double, 0, streams.x0_double, 0, layout.moving_vertices);
+      start_exact = end_exact;
+      return;
+    }
+    queue_uploads_ahead(true);
+    Ahead::Uploads uploads = std::move(*ahead.rounded);
+    ahead.rounded.reset();
+    context.wait_for(uploads.events);
+    fill_in_ahead(ahead.ends);
+    if (ahead.starts.any()) {
+      fill_in_ahead(ahead.starts);
+      for (std::uint32_t o = 0; o < ahead.starts.given.size(); ++o)
+        start_exact[o] = ahead.starts.given[o] ? bool(uploads.start_floats[o]) : end_exact[o];
+      swap_positions(streams.x0, streams.x0_double, streams.x0_next, streams.x0_next_double);
+    } else {
+      start_exact = end_exact;
+      swap_positions(streams.x0, streams.x0_double, streams.x1, streams.x1_double);
+    }
+    swap_positions(streams.x1, streams.x1_double, streams.x_next, streams.x_next_double);
+    for (std::uint32_t o = 0; o < ahead.ends.given.size(); ++o)
+      if (ahead.ends.given[o]) end_exact[o] = uploads.end_floats[o];
+    // The next uploads go to buffers the step read, once nothing reads them.
     ahead.free = context.marker();
     ahead.taken = std::move(uploads.events);
-    std::fill(ahead.ends.begin(), ahead.ends.end(), nullptr);
+    std::fill(ahead.ends.given.begin(), ahead.ends.given.end(), nullptr);
+    std::fill(ahead.starts.given.begin(), ahead.starts.given.end(), nullptr);
   }
 
   // Runs device work; a failure other than bad input marks the detector unusable.
@@ -336,7 +419,16 @@ void Detector::upload_ahead(std::uint32_t object, const std::vector<Vec3>& end)
   State& s = *state_;
   s.check_usable();
   check_positions(s.scene, object, end);
-  s.guarded([&] { s.upload_ahead(object, end); });
+  s.guarded([&] { s.upload_ahead(object, nullptr, end); });
+}
+
+void Detector::upload_ahead(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
+{
+  State& s = *state_;
+  s.check_usable();
+  check_positions(s.scene, object, start);
+  check_positions(s.scene, object, end);
+  s.guarded([&] { s.upload_ahead(object, &start, end); });
 }
 
 void Detector::detect(Report report)
@@ -359,13 +451,15 @@ void Detector::run_step(Report report)
   s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
   const auto all = [](const std::vector<bool>& v) { return std::find(v.begin(), v.end(), false) == v.end(); };
   s.scheduler->set(st.exact_floats, cl_uint(all(s.start_exact) && all(s.end_exact)));
+  s.have_earliest = false;
+  if (report == Report::earliest_toi && has(st.earliest)) {
+    s.earliest_bits.resize(s.count(st.earliest));
+    s.scheduler->read_after_run(st.earliest, s.earliest_bits.data(), s.earliest_bits.size());
+  }
   s.stats.front_retries = s.front.run(*s.scheduler, st);
+  s.have_earliest = report == Report::earliest_toi;
   runtime::Scheduler& q = *s.scheduler;
   if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);
-  // The end of this step starts the next one.
-  q.copy(st.x1, 0, st.x0, 0, s.layout.moving_vertices);
-  if (has(st.x1_double)) q.copy(st.x1_double, 0, st.x0_double, 0, s.layout.moving_vertices);
-  s.start_exact = s.end_exact;
 
   DetectorStats& stats = s.stats;
   stats.run = q.stats();
@@ -377,7 +471,7 @@ void Detector::run_step(Report report)
     stats.run.passes.push_back(readback);
   }
   stats.device_span_ns = span.nanoseconds();
-  s.take_uploads_ahead();
+  s.end_step();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();
   // Over every slice of a step that ran in slices (a stream's count is the last one's).
@@ -417,11 +511,10 @@ std::vector<double> Detector::earliest_toi() const
     }
     return out;
   }
-  if (!has(s.streams.earliest)) return out;
-  const auto bits = s.scheduler->download<std::uint32_t>(s.streams.earliest);
-  for (std::size_t o = 0; o < out.size(); ++o) {
+  if (!s.have_earliest) return out;
+  for (std::size_t o = 0; o < out.size() && o < s.earliest_bits.size(); ++o) {
     float t;
-    std::memcpy(&t, &bits[o], sizeof t);
+    std::memcpy(&t, &s.earliest_bits[o], sizeof t);
     out[o] = t;
   }
   return out;

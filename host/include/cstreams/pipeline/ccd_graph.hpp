@@ -94,9 +94,10 @@ RefitPlan plan_refit(const SceneLayout& layout, std::size_t group);
 // The streams of the CCD graph; those a scene does not need stay unset.
 struct CcdStreams {
   runtime::StreamId x0, x1, x0_double, x1_double;
-  // The ends of the step after the next, uploaded ahead (Detector::upload_ahead): no
-  // pass reads them, and they hold nothing until the first such upload.
-  runtime::StreamId x_next, x_next_double;
+  // The ends of the step after the next, and its starts where those are given too,
+  // uploaded ahead (Detector::upload_ahead): no pass reads them, and they hold nothing
+  // until the first such upload.
+  runtime::StreamId x_next, x_next_double, x0_next, x0_next_double;
   runtime::StreamId faces, edges, nodes, face_edges, vertex_object;
   runtime::StreamId face_words;  // per face: the leaf holding its box << face_leaf_shift | Topology::owned
   runtime::StreamId edge_boxes, node_boxes, refit_ranges;  // a vertex's box is made where it is read
