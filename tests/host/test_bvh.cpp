@@ -182,9 +182,10 @@ TEST_CASE("positions round to the nearest floats, exact only where every coordin
   }
 }
 
-// Large inputs are rounded block by block on several threads: what any one block finds
-// (a coordinate off a float, one out of range) still tells for the whole array, every
-// coordinate lands where it belongs, and the exact copy is the input.
+// Large inputs are rounded and checked block by block on several threads: what any one
+// block finds (a coordinate off a float, one out of range) still tells for the whole
+// array, the check names the vertex, every coordinate lands where it belongs, and the
+// exact copy is the input.
 TEST_CASE("positions of a large object round and copy in blocks, each block's finding telling for the whole",
           "[host][bvh][quick]")
 {
@@ -200,6 +201,7 @@ TEST_CASE("positions of a large object round and copy in blocks, each block's fi
   CHECK(exact.finite);
   CHECK(exact.exact);
   CHECK(copy == x);
+  CHECK_NOTHROW(check_float_positions(x));
   for (const std::size_t j : {std::size_t(0), std::size_t(3 * 8192 + 1), 3 * vertices / 2, 3 * vertices - 1}) {
     INFO("coordinate " << j);
     std::vector<Vec3> one_off = x;
@@ -214,5 +216,6 @@ TEST_CASE("positions of a large object round and copy in blocks, each block's fi
     CHECK(rounded);
     c = std::nan("");
     CHECK_FALSE(round_to_float(one_off, out.data()).finite);
+    CHECK_THROWS_WITH(check_float_positions(one_off), Catch::Contains("vertex " + std::to_string(j / 3) + " "));
   }
 }
