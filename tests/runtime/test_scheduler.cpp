@@ -678,6 +678,51 @@ TEST_CASE("passes update a fixed stream in place, in declaration order, before i
   }
 }
 
+namespace {
+
+// values -> (expand, which lowers `least` to the least hash of each residue of the
+// values mod m) pairs, after `clear` writes `least`; then `copy` copies `least`, behind
+// the pairs where asked (a stage with no counters to read).
+struct LoweringGraph {
+  static constexpr std::size_t n = 10007, m = 61;
+  StreamGraph g;
+  StreamId values, least, copied, pairs;
+};
+
+LoweringGraph lowering_graph(bool copy_behind_pairs)
+{
+  const std::size_t n = LoweringGraph::n, m = LoweringGraph::m;
+  LoweringGraph l;
+  StreamGraph& g = l.g;
+  l.values = g.fixed("values", 4, n);
+  l.least = g.fixed("least", 4, m);
+  l.copied = g.fixed("copied", 4, m);
+  l.pairs = g.variable("pairs", 8, 16);
+  // Declared reader first: the scheduler must run clear, expand, copy.
+  auto& copy = g.pass("copy", {program, "test_copy"}).launch_items(m).read(l.least);
+  if (copy_behind_pairs) copy.read(l.pairs);
+  copy.write(l.copied).arg(buffer_of(l.least)).arg(value_of(cl_uint(m))).arg(buffer_of(l.copied));
+  g.pass("expand", {program, "test_expand_lowering"})
+      .launch_over(l.values)
+      .emit(l.pairs)
+      .lower(l.least)
+      .arg(buffer_of(l.values))
+      .arg(count_of(l.values))
+      .arg(value_of(cl_uint(m)))
+      .arg(buffer_of(l.least));
+  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(l.least).arg(value_of(cl_uint(m))).arg(buffer_of(l.least));
+  return l;
+}
+
+std::vector<std::uint32_t> least_hashes(const std::vector<std::uint32_t>& values)
+{
+  std::vector<std::uint32_t> least(LoweringGraph::m, 0xffffffffu);
+  for (std::uint32_t x : values) least[x % least.size()] = std::min(least[x % least.size()], cstreams::test::test_hash(x));
+  return least;
+}
+
+}  // namespace
+
 // A pass that emits may take a running minimum into a fixed stream (PassSpec::lower):
 // it runs after the stream's writer and before its reader, and growing what it emits
 // runs it again, which leaves the same minimums.
@@ -685,36 +730,19 @@ TEST_CASE("a pass that emits lowers a fixed stream to minimums, after its writer
           "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
-  const std::size_t n = 10007, m = 61;
-  StreamGraph g;
-  auto values = g.fixed("values", 4, n);
-  auto least = g.fixed("least", 4, m), copied = g.fixed("copied", 4, m);
-  auto pairs = g.variable("pairs", 8, 16);
-  // Declared reader first: the scheduler must run clear, expand, copy.
-  g.pass("copy", {program, "test_copy"}).launch_items(m).read(least).write(copied).arg(buffer_of(least))
-      .arg(value_of(cl_uint(m))).arg(buffer_of(copied));
-  g.pass("expand", {program, "test_expand_lowering"})
-      .launch_over(values)
-      .emit(pairs)
-      .lower(least)
-      .arg(buffer_of(values))
-      .arg(count_of(values))
-      .arg(value_of(cl_uint(m)))
-      .arg(buffer_of(least));
-  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(least).arg(value_of(cl_uint(m))).arg(buffer_of(least));
+  const LoweringGraph l = lowering_graph(false);
   for (auto registration : {Registration::lock_free, Registration::segmented_lock}) {
-    Scheduler s(ctx, g, {registration, true});
+    Scheduler s(ctx, l.g, {registration, true});
     CHECK(s.execution_order() == std::vector<std::string>{"clear", "expand", "copy"});
-    const auto v = random_values(n, 23);
-    s.upload(values, v);
+    const auto v = random_values(LoweringGraph::n, 23);
+    s.upload(l.values, v);
     s.run();
     REQUIRE(s.stats().passes.at(1).name == "expand");
     CHECK(s.stats().passes.at(1).reruns > 0);
-    std::vector<std::uint32_t> expected(m, 0xffffffffu);
-    for (std::uint32_t x : v) expected[x % m] = std::min(expected[x % m], cstreams::test::test_hash(x));
-    CHECK(s.download<std::uint32_t>(least) == expected);
-    CHECK(s.download<std::uint32_t>(copied) == expected);
-    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(v).pairs));
+    const std::vector<std::uint32_t> expected = least_hashes(v);
+    CHECK(s.download<std::uint32_t>(l.least) == expected);
+    CHECK(s.download<std::uint32_t>(l.copied) == expected);
+    CHECK(sorted(s.download<Pair>(l.pairs)) == sorted(cstreams::test::reference(v).pairs));
   }
 }
 
@@ -727,31 +755,16 @@ TEST_CASE("a stream read after a run comes back with its last counter read, afte
           "[runtime][scheduler][quick]")
 {
   auto& ctx = cstreams::test::device();
-  const std::size_t n = 10007, m = 61;
-  StreamGraph g;
-  auto values = g.fixed("values", 4, n);
-  auto least = g.fixed("least", 4, m), copied = g.fixed("copied", 4, m);
-  auto pairs = g.variable("pairs", 8, 16);
-  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(least).arg(value_of(cl_uint(m))).arg(buffer_of(least));
-  g.pass("expand", {program, "test_expand_lowering"})
-      .launch_over(values)
-      .emit(pairs)
-      .lower(least)
-      .arg(buffer_of(values))
-      .arg(count_of(values))
-      .arg(value_of(cl_uint(m)))
-      .arg(buffer_of(least));
-  // Behind the pairs, in a stage with no counters to read: nothing brings `copied` back
-  // but a read of its own.
-  g.pass("copy", {program, "test_copy"}).launch_items(m).read(least).read(pairs).write(copied).arg(buffer_of(least))
-      .arg(value_of(cl_uint(m))).arg(buffer_of(copied));
-  const auto v = random_values(n, 31);
-  std::vector<std::uint32_t> expected(m, 0xffffffffu);
-  for (std::uint32_t x : v) expected[x % m] = std::min(expected[x % m], cstreams::test::test_hash(x));
+  const std::size_t m = LoweringGraph::m;
+  // Behind the pairs, `copied` is written after the last counter read: nothing brings
+  // it back but a read of its own.
+  const LoweringGraph l = lowering_graph(true);
+  const auto v = random_values(LoweringGraph::n, 31);
+  const std::vector<std::uint32_t> expected = least_hashes(v);
   // Blocking reads of a first run from a new scheduler, with the given reads after it.
   const auto first_run = [&](Registration registration, const std::vector<std::pair<StreamId, std::vector<std::uint32_t>*>>& reads) {
-    Scheduler s(ctx, g, {registration, true});
-    s.upload(values, v);
+    Scheduler s(ctx, l.g, {registration, true});
+    s.upload(l.values, v);
     for (auto& [stream, host] : reads) s.read_after_run(stream, host->data(), host->size());
     const std::uint64_t before = ctx.blocking_reads();
     s.run();
@@ -763,15 +776,15 @@ TEST_CASE("a stream read after a run comes back with its last counter read, afte
     INFO(to_string(registration));
     const std::uint64_t alone = first_run(registration, {});
     std::vector<std::uint32_t> lowered(m, 7), copy(m, 7);
-    CHECK(first_run(registration, {{least, &lowered}}) == alone);
+    CHECK(first_run(registration, {{l.least, &lowered}}) == alone);
     CHECK(lowered == expected);
-    CHECK(first_run(registration, {{copied, &copy}}) == alone + 1);
+    CHECK(first_run(registration, {{l.copied, &copy}}) == alone + 1);
     CHECK(copy == expected);
 
-    Scheduler s(ctx, g, {registration, true});
-    s.upload(values, v);
+    Scheduler s(ctx, l.g, {registration, true});
+    s.upload(l.values, v);
     std::vector<std::uint32_t> once(m, 7);
-    s.read_after_run(least, once.data(), m);
+    s.read_after_run(l.least, once.data(), m);
     // The caller's work before each counter read: as many as the run made.
     unsigned before_reads = 0;
     s.on_counter_read([&] { ++before_reads; });
@@ -783,10 +796,10 @@ TEST_CASE("a stream read after a run comes back with its last counter read, afte
     s.run();
     CHECK(once == std::vector<std::uint32_t>(m, 7u));
   }
-  Scheduler s(ctx, g);
+  Scheduler s(ctx, l.g);
   std::vector<std::uint32_t> too_many(m + 1);
-  CHECK_THROWS_WITH(s.read_after_run(least, too_many.data(), m + 1), Catch::Contains("which holds 61"));
-  CHECK_THROWS_WITH(s.read_after_run(pairs, too_many.data(), 1), Catch::Contains("variable-length"));
+  CHECK_THROWS_WITH(s.read_after_run(l.least, too_many.data(), m + 1), Catch::Contains("which holds 61"));
+  CHECK_THROWS_WITH(s.read_after_run(l.pairs, too_many.data(), 1), Catch::Contains("variable-length"));
 }
 
 // A pass launches another kernel of its program while a parameter is set

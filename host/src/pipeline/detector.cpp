@@ -18,8 +18,8 @@
 #include <cmath>
 #include <cstring>
 #include <future>
-#include <optional>
 #include <map>
+#include <optional>
 
 namespace cstreams {
 
@@ -125,10 +125,11 @@ struct Detector::State {
   // Per object, whether its positions at the step's start and end are floats: where all
   // are, the step's float kernels take them as the exact input (CcdStreams::exact_floats).
   std::vector<bool> start_exact, end_exact;
-  // Positions uploaded ahead (upload_ahead): the callers' positions, uploaded when the
-  // next step starts by a task of their own through pinned copies; the uploads of the
-  // step that runs (their events, once the task is done) and of the last one (which
-  // may still read the copies); and when the buffers they go to are no longer read.
+  // Positions uploaded ahead (upload_ahead): the callers' positions, rounded into pinned
+  // copies by a task of their own as the next step starts and uploaded from there on
+  // the context's second queue once it is done; the step's uploads (once queued) and
+  // the last step's (which may still read the copies); and when the buffers they go
+  // to are no longer read.
   struct Ahead {
     // The step's ends, or its starts: where they go and the pinned copies they go from.
     struct Side {
