@@ -80,19 +80,19 @@ inline void cs_lower_objects(const uint2 p, const uint vertex_face, __global con
 
 /* Both kernels' body; `mode` is the constant 0 or 1 that cs_cubic_contact takes as
  * `earliest` (a name of its own: CS_OBJECT_ARGS names the kernel's `earliest`). */
-#define CS_CUBIC_PAIRS_BODY(mode)                                                                      \
-  CS_EMITTER_BEGIN(vf_contacts);                                                                           \
-  CS_EMITTER_BEGIN(ee_contacts);                                                                           \
-  uint2 pair;                                                                                              \
-  uint vertex_face;                                                                                        \
-  real t;                                                                                                  \
+#define CS_CUBIC_PAIRS_BODY(mode)                                                                           \
+  CS_EMITTER_BEGIN(vf_contacts);                                                                            \
+  CS_EMITTER_BEGIN(ee_contacts);                                                                            \
+  uint2 pair;                                                                                               \
+  uint vertex_face;                                                                                         \
+  real t;                                                                                                   \
   if (cs_cubic_contact(get_global_id(0), CS_FOUR_STREAM_ARGS, x0, x1, faces, edges, exact_input, tolerance, \
-                       separation, use_filter, mode, CS_OBJECT_ARGS, &pair, &vertex_face, &t)) {           \
-    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));                               \
-    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));                                           \
-    if (mode) cs_lower_objects(pair, vertex_face, faces, edges, t, CS_OBJECT_ARGS);                        \
-  }                                                                                                        \
-  CS_EMITTER_END(vf_contacts);                                                                             \
+                       separation, use_filter, mode, CS_OBJECT_ARGS, &pair, &vertex_face, &t)) {            \
+    if (vertex_face) CS_EMIT(vf_contacts, cs_contact(pair, t, CS_COLLIDES));                                \
+    else CS_EMIT(ee_contacts, cs_contact(pair, t, CS_COLLIDES));                                            \
+    if (mode) cs_lower_objects(pair, vertex_face, faces, edges, t, CS_OBJECT_ARGS);                         \
+  }                                                                                                         \
+  CS_EMITTER_END(vf_contacts);                                                                              \
   CS_EMITTER_END(ee_contacts)
 
 __kernel void cs_cubic_pairs(CS_CUBIC_PARAMS, CS_EMITTER_PARAMS(uint4, vf_contacts),

@@ -887,9 +887,10 @@ struct Scheduler::State {
   void execute(PassState& p, Redo redo)
   {
     p.ran = true;
-    for (StreamId s : pass_outputs(*p.spec))
-      for (RunRead& r : run_reads)
-        if (r.stream == s) r.queued = false;
+    if (!run_reads.empty())
+      for (StreamId s : pass_outputs(*p.spec))
+        for (RunRead& r : run_reads)
+          if (r.stream == s) r.queued = false;
     std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     for (StreamId s : p.spec->also_over) n += state(s).count;
     const std::size_t wg = context.work_group_size();

@@ -53,10 +53,6 @@ void inflate(Kdop18f& d, float separation)
   }
 }
 
-}  // namespace
-
-namespace {
-
 // Coordinates a task rounds or checks: below this many in all, one thread does the
 // whole (a task's start costs more than a block takes).
 constexpr std::size_t coordinates_a_task = 3 * 8192;
@@ -91,9 +87,8 @@ void check_float_positions(const std::vector<Vec3>& x)
   // Only bad input looks for the vertex to name.
   if (finite) return;
   for (std::size_t i = 0; i < x.size(); ++i)
-    for (int k = 0; k < 3; ++k)
-      if (!(std::fabs(x[i][k]) <= double(FLT_MAX)))
-        throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
+    if (!finite_floats(d, 3 * i, 3 * i + 3))
+      throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
 }
 
 namespace {
