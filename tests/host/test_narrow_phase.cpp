@@ -382,10 +382,11 @@ template <class Real> void check_apart_until(runtime::Context& device, const run
 
 }  // namespace
 
-// In steps that report earliest times alone, the cubic test skips a pair whose
-// features' boxes stay apart until its objects already have a contact no later
-// (cs_apart_until in ccd/cubic.h): the bound must never pass a contact the cubic test
-// finds, on the hard cases, a real step and queries whose features meet at any time.
+// The cubic test skips a pair whose features' boxes stay apart through the step, and,
+// in steps that report earliest times alone, until its objects already have a contact
+// no later (cs_apart_until in ccd/cubic.h): the bound must never pass a contact the
+// cubic test finds, on the hard cases, a real step and queries whose features meet at
+// any time.
 TEST_CASE("the cubic test finds no contact before the time its features' boxes stay apart until", "[narrow][quick]")
 {
   auto& device = cstreams::test::device();
