@@ -11,8 +11,8 @@
 
 #define CS_DOP_FLOATS 18
 
-/* A face's word: the BVH leaf that holds its box, above six bits of the features the
- * face owns (broad_phase.cl), so that one load gives the decomposition both. */
+/* A face's word: the BVH leaf that holds its box (for the orphan cull, orphans.cl),
+ * above six bits of the features the face owns (for the decomposition, broad_phase.cl). */
 #define CS_FACE_LEAF_SHIFT 6u
 inline uint cs_face_leaf(const uint word) { return word >> CS_FACE_LEAF_SHIFT; }
 

@@ -292,6 +292,36 @@ TEST_CASE("device candidates equal the host's in float boxes, in every front mod
   check_candidates(bart, 8, options);
 }
 
+// Two triangles in one plane move along x. Passing the same place a step apart, their
+// swept boxes overlap while their features never come near: the decomposition leaves
+// every feature pair out. Moving into each other, it keeps what meets.
+TEST_CASE("the decomposition leaves out features that pass the same place at different times", "[detector][quick]")
+{
+  const std::vector<Vec3> a0{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, b0{{3, 0, 0}, {4, 0, 0}, {3, 1, 0}};
+  const auto moved = [](std::vector<Vec3> x, double dx) {
+    for (auto& p : x) p.x() += dx;
+    return x;
+  };
+  SceneDescription scene;
+  const std::uint32_t a = scene.add({"a", {{0, 1, 2}}, a0}), b = scene.add({"b", {{0, 1, 2}}, b0});
+  Detector detector(cstreams::test::device(), scene);
+  // a's tip reaches x = 3.5 at the end; b starts at x = 3 and moves on by 2.
+  detector.set_step(a, a0, moved(a0, 2.5));
+  detector.set_step(b, b0, moved(b0, 2));
+  detector.detect();
+  CHECK(detector.stats().triangle_pairs == 1);
+  CHECK(detector.stats().vf_candidates == 0);
+  CHECK(detector.stats().ee_candidates == 0);
+  CHECK(detector.contacts().empty());
+
+  detector.set_step(a, a0, moved(a0, 2.5));
+  detector.set_step(b, b0, moved(b0, -2.5));
+  detector.detect();
+  CHECK(detector.stats().vf_candidates > 0);
+  CHECK(detector.stats().ee_candidates > 0);
+  CHECK(!detector.contacts().empty());
+}
+
 namespace {
 
 // Contacts of every step of `scene` through one detector fed frame by frame; `retries`

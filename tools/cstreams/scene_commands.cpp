@@ -149,6 +149,7 @@ void reference(const ReferenceCommandOptions& o)
   const auto [first, last] = resolve(parse_step_range(o.frames), scene.frame_count());
   ReferenceOptions options;
   options.solver = o.solver;
+  options.tolerance = o.solver.tolerance;
   options.broad_phase = o.brute_force ? BroadPhase::brute_force : BroadPhase::bvh;
   std::vector<Contact> all;
   for (std::size_t f = first; f < last; ++f) {

@@ -561,8 +561,7 @@ struct GraphBuilder {
         .arg(buffer_of(s.x0))
         .arg(buffer_of(s.x1))
         .arg(value_of(separation))
-        .arg(buffer_of(s.edge_boxes))
-        .arg(buffer_of(s.node_boxes));
+        .arg(value_of(float_above(solver.tolerance)));
   }
 
   // The elementary tests of every candidate stream, each emitting its contacts.

@@ -4,7 +4,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <mutex>
+#include <type_traits>
 
 namespace cstreams {
 
@@ -111,9 +114,83 @@ template <class T> void sort_unique(std::vector<T>& v)
 
 namespace {
 
-template <class Box>
+// The decomposition's cull of the device (broad_phase.cl, cs_ends_apart) in the same
+// arithmetic, for the feature pairs of faces fa and fb: their six points at both ends of
+// the step (fa's, then fb's) and the margin.
+template <class Real> class EndsCull {
+public:
+  EndsCull(const Face& fa, const std::vector<Vec3>& a0, const std::vector<Vec3>& a1, const Face& fb,
+           const std::vector<Vec3>& b0, const std::vector<Vec3>& b1, Real separation, Real tolerance)
+  {
+    Real scale = 0;
+    for (int j = 0; j < 6; ++j) {
+      const std::uint32_t v = j < 3 ? fa[j] : fb[j - 3];
+      const Vec3 &x = j < 3 ? a0[v] : b0[v], &y = j < 3 ? a1[v] : b1[v];
+      for (int k = 0; k < 3; ++k) {
+        p0_[j][k] = Real(x[k]);
+        p1_[j][k] = Real(y[k]);
+        scale = std::max(scale, std::max(std::abs(p0_[j][k]), std::abs(p1_[j][k])));
+      }
+    }
+    // Exact positions need room only for the double gaps' rounding; staying under the
+    // device's 2^-16 keeps every pair the double boxes keep among the float boxes' pairs.
+    const Real rounding = std::is_same<Real, float>::value ? Real(0x1p-16) : Real(0x1p-17);
+    margin_ = separation + (3 * tolerance + rounding) * scale;
+  }
+
+  // Whether points (a0, a1, a2) and (b0, b1, b2) stay more than the margin apart.
+  bool apart(int a0, int a1, int a2, int b0, int b1, int b2) const
+  {
+    for (int k = 0; k < 3; ++k) {
+      const auto lo = [k](const Real (&p)[6][3], int i, int j, int l) { return std::min(std::min(p[i][k], p[j][k]), p[l][k]); };
+      const auto hi = [k](const Real (&p)[6][3], int i, int j, int l) { return std::max(std::max(p[i][k], p[j][k]), p[l][k]); };
+      if ((lo(p0_, b0, b1, b2) - hi(p0_, a0, a1, a2) > margin_ && lo(p1_, b0, b1, b2) - hi(p1_, a0, a1, a2) > margin_) ||
+          (lo(p0_, a0, a1, a2) - hi(p0_, b0, b1, b2) > margin_ && lo(p1_, a0, a1, a2) - hi(p1_, b0, b1, b2) > margin_))
+        return true;
+    }
+    return false;
+  }
+
+private:
+  Real p0_[6][3], p1_[6][3];
+  Real margin_;
+};
+
+int local_index(const std::array<std::uint32_t, 3>& ids, std::uint32_t id)
+{
+  return ids[0] == id ? 0 : ids[1] == id ? 1 : 2;
+}
+
+// The feature pairs of faces fa (object a) and fb (object b), less those whose features
+// stay apart through the step. Face edge k joins the face's vertices k and k + 1.
+template <class Real>
+void decompose_and_cull(const Step& step, std::uint32_t a, std::uint32_t fa, std::uint32_t b, std::uint32_t fb,
+                        Real separation, Real tolerance, std::vector<VertexFace>& vf_ab,
+                        std::vector<VertexFace>& vf_ba, std::vector<EdgeEdge>& ee)
+{
+  const Topology &ta = step.scene->objects[a].topology, &tb = step.scene->objects[b].topology;
+  std::vector<VertexFace> ab, ba;
+  std::vector<EdgeEdge> edges;
+  decompose(ta, fa, tb, fb, ab, ba, edges);
+  const EndsCull<Real> cull(ta.faces[fa], step.x0[a], step.x1[a], tb.faces[fb], step.x0[b], step.x1[b], separation,
+                            tolerance);
+  for (const auto& p : ab) {
+    const int k = local_index(ta.faces[fa], p.vertex);
+    if (!cull.apart(k, k, k, 3, 4, 5)) vf_ab.push_back(p);
+  }
+  for (const auto& p : ba) {
+    const int k = 3 + local_index(tb.faces[fb], p.vertex);
+    if (!cull.apart(k, k, k, 0, 1, 2)) vf_ba.push_back(p);
+  }
+  for (const auto& p : edges) {
+    const int i = local_index(ta.face_edges[fa], p.a), j = local_index(tb.face_edges[fb], p.b);
+    if (!cull.apart(i, (i + 1) % 3, i, 3 + j, 3 + (j + 1) % 3, 3 + j)) ee.push_back(p);
+  }
+}
+
+template <class Real, class Box>
 Candidates candidates(const Step& step, const std::vector<Bounds<Box>>& bounds, const std::vector<Bvh>& trees,
-                      BroadPhase broad_phase)
+                      BroadPhase broad_phase, Real separation, Real tolerance)
 {
   const Scene& scene = *step.scene;
   const std::uint32_t n = std::uint32_t(scene.objects.size());
@@ -122,33 +199,28 @@ Candidates candidates(const Step& step, const std::vector<Bounds<Box>>& bounds, 
     for (std::uint32_t b = a; b < n; ++b) {
       if (!scene.may_collide(a, b)) continue;
       const bool self = a == b;
-      const Topology &ta = scene.objects[a].topology, &tb = scene.objects[b].topology;
+      const Topology& ta = scene.objects[a].topology;
       const Bounds<Box>&bounds_a = bounds[a], &bounds_b = bounds[b];
       const FacePairs pairs = broad_phase == BroadPhase::bvh
                                   ? traverse(trees[a], bounds_a.nodes, trees[b], bounds_b.nodes, self)
                                   : brute_force(bounds_a.faces, bounds_b.faces, self);
       CandidateBlock ab{a, b, {}, {}}, ba{b, a, {}, {}};
-      std::vector<VertexFace> vf_ab, vf_ba;
-      std::vector<EdgeEdge> ee;
       for (const auto& [fa, fb] : pairs) {
         if (self && ta.adjacent(fa, fb)) continue;
-        decompose(ta, fa, tb, fb, vf_ab, vf_ba, ee);
+        decompose_and_cull(step, a, fa, b, fb, separation, tolerance, ab.vf, ba.vf, ab.ee);
       }
       if (self) {
-        const OrphanSet orphans = build_orphans(ta);
-        vf_ab.insert(vf_ab.end(), vf_ba.begin(), vf_ba.end());
-        vf_ba.clear();
-        vf_ab.insert(vf_ab.end(), orphans.vf.begin(), orphans.vf.end());
-        for (auto& e : ee)
+        ab.vf.insert(ab.vf.end(), ba.vf.begin(), ba.vf.end());
+        ba.vf.clear();
+        for (auto& e : ab.ee)
           if (e.a > e.b) std::swap(e.a, e.b);
-        ee.insert(ee.end(), orphans.ee.begin(), orphans.ee.end());
+        // Orphans are culled by their swept boxes (orphans.cl).
+        const OrphanSet orphans = build_orphans(ta);
+        for (const auto& p : orphans.vf)
+          if (bounds_a.vertices[p.vertex].overlaps(bounds_a.faces[p.face])) ab.vf.push_back(p);
+        for (const auto& p : orphans.ee)
+          if (bounds_a.edges[p.a].overlaps(bounds_a.edges[p.b])) ab.ee.push_back(p);
       }
-      for (const auto& p : vf_ab)
-        if (bounds_a.vertices[p.vertex].overlaps(bounds_b.faces[p.face])) ab.vf.push_back(p);
-      for (const auto& p : vf_ba)
-        if (bounds_b.vertices[p.vertex].overlaps(bounds_a.faces[p.face])) ba.vf.push_back(p);
-      for (const auto& p : ee)
-        if (bounds_a.edges[p.a].overlaps(bounds_b.edges[p.b])) ab.ee.push_back(p);
       sort_unique(ab.vf);
       sort_unique(ab.ee);
       sort_unique(ba.vf);
@@ -179,7 +251,7 @@ Candidates reference_broad_phase(const Step& step, const ReferenceOptions& optio
     std::vector<Bounds<Kdop18>> bounds(n);
     for (std::size_t o = 0; o < n; ++o)
       bounds[o] = {std::move(exact[o].faces), std::move(exact[o].edges), std::move(exact[o].vertices), trees[o].boxes};
-    return candidates(step, bounds, trees, options.broad_phase);
+    return candidates(step, bounds, trees, options.broad_phase, separation, options.tolerance);
   }
   // The float separation is rounded up, so the float boxes stay conservative.
   const float float_separation = float_above(separation);
@@ -188,7 +260,7 @@ Candidates reference_broad_phase(const Step& step, const ReferenceOptions& optio
     FloatBounds f = float_bounds(scene.objects[o].topology, trees[o], step.x0[o], step.x1[o], float_separation);
     bounds[o] = {std::move(f.faces), std::move(f.edges), std::move(f.vertices), std::move(f.nodes)};
   }
-  return candidates(step, bounds, trees, options.broad_phase);
+  return candidates(step, bounds, trees, options.broad_phase, float_separation, float_above(options.tolerance));
 }
 
 Query vertex_face_query(const Step& step, std::uint32_t oa, std::uint32_t ob, VertexFace p)

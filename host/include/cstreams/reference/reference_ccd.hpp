@@ -43,11 +43,17 @@ struct ReferenceOptions {
   BroadPhase broad_phase = BroadPhase::bvh;
   BoundsPrecision bounds = BoundsPrecision::double_;
   ReferenceSolverOptions solver;  // its min_separation also inflates the BVs
+  // The tolerance of the solver the candidates go to, relative to their coordinates
+  // (the device's: SolverOptions::tolerance): feature pairs that stay more than 3 of it
+  // (and the separation) apart through the step are left out.
+  double tolerance = 1e-5;
 };
 
 // The host broad phase: swept 18-DOPs, triangle pairs of overlapping BVs (non-adjacent
-// within an object), their feature pairs by ownership, orphans of self-colliding
-// objects, and the cull by feature BVs. BVH traversal and brute force give the same set.
+// within an object), their feature pairs by ownership less those whose points stay
+// apart through the step (as the device's decomposition, broad_phase.cl), and orphans
+// of self-colliding objects culled by their swept BVs. BVH traversal and brute force
+// give the same set.
 Candidates reference_broad_phase(const Step& step, const ReferenceOptions& options = {});
 
 // Runs the reference solver on every candidate (in parallel) and returns the
