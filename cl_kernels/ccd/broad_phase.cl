@@ -246,8 +246,8 @@ inline int cs_ends_apart(const float p0[6][3], const float p1[6][3], const int a
  * of that scale for positions rounded to float and the gaps' own rounding. With the
  * faces' six points read once, every test runs on registers; the swept boxes of the
  * faces, edges and vertices that this replaced were read from memory and let through
- * more than twice as many pairs (H200: cloth-ball's decomposition 0.34 -> 0.23 ms and
- * candidates 3.76 -> 1.77 million; n-body's 0.61 -> 0.34 ms, 11.6 -> 2.6 million).
+ * more than twice as many pairs (H200: cloth-ball's decomposition 0.34 -> 0.24 ms and
+ * candidates 3.76 -> 1.77 million; n-body's 0.60 -> 0.36 ms, 11.6 -> 2.8 million).
  * Both tests together took 96 registers and cloth-ball's decomposition 0.48 ms. */
 __kernel void cs_decompose(__global const uint2* pairs, const uint n, __global const uint* faces,
                            __global const uint* face_edges, __global const uint* face_words,

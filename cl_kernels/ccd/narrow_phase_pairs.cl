@@ -114,15 +114,16 @@ inline void cs_lower_objects(const uint2 p, const uint vertex_face, __global con
 }
 
 /* CS_CUBIC_ITEM(mode) sets `has`, whether this work-item runs the cubic, on `item` with
- * its bound `until`. On a GPU a group gathers the items cs_cubic_open leaves (about half
- * of cloth-ball's, a sixth where earliest times alone are asked for) in local memory
- * and tests them side by side: tested where they lay, nearly every warp held one and ran
- * the cubic. With the kinds as constants, H200: cloth-ball's tests 0.397 -> 0.390 ms,
- * earliest-only 0.357 -> 0.272; n-body's 0.554 -> 0.513, earliest-only 0.493 -> 0.400.
- * Either change alone was slower somewhere: the constants alone took 85 registers and
- * cloth-ball's tests 0.47 ms. A CPU runs a group's work-items one after another, so no
- * cubic holds others up: there the items stay where they are and only earliest times
- * take the bound (pocl: cloth-ball's tests took a quarter longer gathered). */
+ * its bound `until`. On a GPU a group gathers the items cs_cubic_open leaves in local
+ * memory and tests them side by side: tested where they lay, nearly every warp held one
+ * and ran the cubic (from swept boxes, the bound left about half of cloth-ball's
+ * candidates, and a sixth where earliest times alone are asked for). With the kinds as
+ * constants, H200: cloth-ball's tests 0.397 -> 0.390 ms, earliest-only 0.357 -> 0.272;
+ * n-body's 0.554 -> 0.513, earliest-only 0.493 -> 0.400. Either change alone was slower
+ * somewhere: the constants alone took 85 registers and cloth-ball's tests 0.47 ms. A
+ * CPU runs a group's work-items one after another, so no cubic holds others up: there
+ * the items stay where they are and only earliest times take the bound (pocl:
+ * cloth-ball's tests took a quarter longer gathered). */
 #if CS_CPU
 #define CS_CUBIC_ITEM(mode)                                                                                 \
   const uint item = (uint)get_global_id(0);                                                                 \
