@@ -4,30 +4,43 @@
 #include "bounds.h"
 #include "runtime/common.h"
 
-/* One work-item per moving face; a vertex's or an edge's box is made where it is read
- * (bounds.h, orphans.cl). The group's boxes are staged in local memory and written word
- * by word across the group, neighbouring work-items to neighbouring words: a box a
- * work-item put 72 bytes between the words of one store. A face's box is its BVH
- * leaf's (cs_face_leaf of its word), which the refit then leaves as it is: kept apart as
- * well, the faces' boxes held n-body's 10 MiB twice. */
+/* One work-item per moving face or edge (the nf faces, then the ne edges), in one
+ * launch rather than one a kind; a vertex's box is made where it is read (bounds.h).
+ * The group's boxes are staged in local memory and written word by word across the
+ * group, neighbouring work-items to neighbouring words: a box a work-item put 72 bytes
+ * between the words of one store. A face's box is its BVH leaf's (cs_face_leaf of its
+ * word), which the refit then leaves as it is: kept apart as well, the faces' boxes held
+ * n-body's 10 MiB twice. */
 CS_GROUP_KERNEL void cs_primitive_bounds(__global const float* x0, __global const float* x1,
-                                         __global const uint* faces, const uint nf, const float separation,
-                                         __global const uint* face_words, __global float* node_boxes)
+                                         __global const uint* faces, __global const uint* edges, const uint nf,
+                                         const uint ne, const float separation,
+                                         __global const uint* face_words, __global float* node_boxes,
+                                         __global float* edge_boxes)
 {
   __local float staged[CS_WG_SIZE * CS_DOP_FLOATS];
   const uint lid = get_local_id(0), first = get_group_id(0) * CS_WG_SIZE, i = first + lid;
+  const uint total = nf + ne;
+  uint vertices[3];
+  int count = 0;
   if (i < nf) {
-    uint vertices[3];
     for (int c = 0; c < 3; ++c) vertices[c] = faces[3 * i + c];
+    count = 3;
+  } else if (i < total) {
+    for (int c = 0; c < 2; ++c) vertices[c] = edges[2 * (i - nf) + c];
+    count = 2;
+  }
+  if (count) {
     float box[CS_DOP_FLOATS];
-    cs_swept_dop(x0, x1, vertices, 3, separation, box);
+    cs_swept_dop(x0, x1, vertices, count, separation, box);
     for (int k = 0; k < CS_DOP_FLOATS; ++k) staged[CS_DOP_FLOATS * lid + k] = box[k];
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-  const uint words = min((uint)CS_WG_SIZE, nf - first) * CS_DOP_FLOATS;
+  const uint words = min((uint)CS_WG_SIZE, total - first) * CS_DOP_FLOATS;
   for (uint w = lid; w < words; w += CS_WG_SIZE) {
     const uint j = first + w / CS_DOP_FLOATS, k = w % CS_DOP_FLOATS;
-    node_boxes[(size_t)CS_DOP_FLOATS * cs_face_leaf(face_words[j]) + k] = staged[w];
+    __global float* box = j < nf ? node_boxes + (size_t)CS_DOP_FLOATS * cs_face_leaf(face_words[j])
+                                 : edge_boxes + (size_t)CS_DOP_FLOATS * (j - nf);
+    box[k] = staged[w];
   }
 }
 

@@ -228,12 +228,11 @@ TEST_CASE("the graph models only what the scene needs", "[detector][quick]")
     CHECK(layout.moving_faces == scene.objects[mover].faces.size());
     CHECK(layout.slots.front().object == mover);  // moving objects first
     g = graph_of(scene);
-    // Bounds passes cover the mover's faces only; static bounds are uploaded once.
-    // Vertices' and edges' boxes are made where they are read.
+    // Bounds passes cover the mover only; static bounds are uploaded once. Vertices'
+    // boxes are made where they are read.
     CHECK(contains(names(g.passes()), "swept bounds"));
     CHECK(refitted_levels(g) == levels_up_from(layout.trees[mover].depth()));
-    CHECK(g.passes().front().items == layout.moving_faces);
-    CHECK(!contains(names(g.streams()), "edge bounds"));
+    CHECK(g.passes().front().items == layout.moving_faces + layout.moving_edges);
 
     scene.ignore(0, mover);
     scene.ignore(1, mover);

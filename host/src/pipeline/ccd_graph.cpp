@@ -154,6 +154,7 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
     if (s.moving) {
       l.moving_vertices += t.vertex_count;
       l.moving_faces += t.faces.size();
+      l.moving_edges += t.edges.size();
     }
     if (s.self) {
       const OrphanSet orphans = build_orphans(t);
@@ -433,6 +434,7 @@ struct GraphBuilder {
     s.edges = g.fixed("edges", 8, ne);
     s.nodes = g.fixed("bvh nodes", 8, nn);
     s.face_words = g.fixed("face leaves and ownership", 4, nf);
+    s.edge_boxes = g.fixed("edge bounds", 72, ne);
     s.node_boxes = g.fixed("bvh bounds", 72, nn);
   }
 
@@ -444,15 +446,19 @@ struct GraphBuilder {
     if (l.moving_faces == 0) return;
     const char* bounds = "ccd/bounds.cl";
     g.pass("swept bounds", {bounds, "cs_primitive_bounds"})
-        .launch_items(l.moving_faces)
+        .launch_items(l.moving_faces + l.moving_edges)
         .update(s.node_boxes)
+        .write(s.edge_boxes)
         .arg(buffer_of(s.x0))
         .arg(buffer_of(s.x1))
         .arg(buffer_of(s.faces))
+        .arg(buffer_of(s.edges))
         .arg(value_of(cl_uint(l.moving_faces)))
+        .arg(value_of(cl_uint(l.moving_edges)))
         .arg(value_of(separation))
         .arg(buffer_of(s.face_words))
-        .arg(buffer_of(s.node_boxes));
+        .arg(buffer_of(s.node_boxes))
+        .arg(buffer_of(s.edge_boxes));
     s.refit_ranges = g.fixed("refit ranges", 8, refit.ranges.size());
     for (const RefitBand& band : refit.bands) {
       const std::size_t last = band.top + band.levels - 1;
@@ -519,7 +525,7 @@ struct GraphBuilder {
           .arg(buffer_of(s.node_boxes));
     if (PassSpec* cull = cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs",
                                       s.orphan_ee, s.kept_ee))
-      cull->arg(buffer_of(s.x0)).arg(buffer_of(s.x1)).arg(buffer_of(s.edges)).arg(value_of(separation));
+      cull->arg(buffer_of(s.edge_boxes));
     auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
                        .launch_over(s.front)
                        .read(s.node_boxes)

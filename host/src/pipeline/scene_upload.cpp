@@ -87,6 +87,7 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
     // Static bounds never change: the host's float twin computes them once.
     const FloatBounds b = float_bounds(build_topology(object.faces, x.size()), layout.trees[o], x, x,
                                        float_above(min_separation));
+    q.write(s.edge_boxes, sl.first_edge, b.edges.data(), b.edges.size());
     q.write(s.node_boxes, sl.first_node, b.nodes.data(), b.nodes.size());
   }
   if (!has(s.front)) return exact;

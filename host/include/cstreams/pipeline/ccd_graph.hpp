@@ -52,7 +52,7 @@ struct SceneLayout {
   std::vector<Bvh> trees;              // per object, local ids
   std::vector<std::array<std::int32_t, 4>> nodes;  // (first child, face, parent, depth), global ids
   std::vector<std::uint32_t> levels;   // moving nodes of level d: [levels[d], levels[d + 1])
-  std::size_t moving_vertices = 0, moving_faces = 0, moving_nodes = 0;
+  std::size_t moving_vertices = 0, moving_faces = 0, moving_edges = 0, moving_nodes = 0;
   std::size_t depth = 0;               // deepest tree's levels
   std::vector<NodePair> seeds;         // (root, root) of every pair of objects that may collide
   OrphanSet orphans;                   // of self-colliding objects, global ids
@@ -100,7 +100,7 @@ struct CcdStreams {
   runtime::StreamId x_next, x_next_double, x0_next, x0_next_double;
   runtime::StreamId faces, edges, nodes, face_edges, vertex_object;
   runtime::StreamId face_words;  // per face: the leaf holding its box << face_leaf_shift | Topology::owned
-  runtime::StreamId node_boxes, refit_ranges;  // a vertex's or an edge's box is made where it is read
+  runtime::StreamId edge_boxes, node_boxes, refit_ranges;  // a vertex's box is made where it is read
   runtime::StreamId front, next_front;  // variable (front kept) or front fixed: the seeds
   runtime::StreamId searches_cut;       // cs_front_update's cut[2]: a search ran out of loop trips
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
