@@ -57,6 +57,7 @@ struct EmitterState {
   std::size_t counts_at = StepArena::none;
   std::size_t segments = 0;
   std::size_t segment_capacity = 0;  // lock-free: items a work-item's segment holds
+  std::size_t group = 0;             // work-items a group of the pass's launches
   std::uint32_t overflow_slot = no_slot;
   // Segmented lock: this execution's segment offsets (the prefix sum of its counts,
   // then their total), and the last execution's, which plan this one's segments.
@@ -623,7 +624,7 @@ struct Scheduler::State {
   {
     const bool per_group = options.registration == Registration::segmented_lock;
     const std::size_t expected =
-        std::max<std::size_t>(1, std::size_t(std::ceil(e.expected * double(per_group ? context.work_group_size() : 1))));
+        std::max<std::size_t>(1, std::size_t(std::ceil(e.expected * double(per_group ? e.group : 1))));
     return per_group && e.fresh > 0 ? std::min(expected, e.fresh) : expected;
   }
 
@@ -650,7 +651,7 @@ struct Scheduler::State {
   {
     const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
     const std::uint64_t least =
-        planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * context.work_group_size()) : 0;
+        planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * e.group) : 0;
     return std::max(least, 2 * spilled) + (segments - planned) * spill_per_group;
   }
 
@@ -660,16 +661,22 @@ struct Scheduler::State {
   // contention, but its memory is the stream itself.
   bool segments_fit(const EmitterState& e, std::size_t global) const
   {
-    const std::uint64_t items = segment_items(e, segment_count(global));
+    const std::uint64_t items = segment_items(e, segment_count(e, global));
     if (items > 0xffffffffu) return false;  // the kernels index segments with 32 bits
     const std::size_t bytes = std::size_t(items) * spec(e.stream).element_bytes;
     const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
     return bytes <= context.device().max_allocation && in_use <= limit && bytes <= limit - in_use;
   }
 
-  std::size_t segment_count(std::size_t global) const
+  std::size_t segment_count(const EmitterState& e, std::size_t global) const
   {
-    return options.registration == Registration::segmented_lock ? global / context.work_group_size() : global;
+    return options.registration == Registration::segmented_lock ? global / e.group : global;
+  }
+
+  std::size_t group_of(const PassSpec& spec) const
+  {
+    const std::size_t wg = context.work_group_size();
+    return spec.group ? std::min(spec.group, wg) : wg;
   }
 
   // This run of the pass registers through one global counter, and its segments'
@@ -691,7 +698,7 @@ struct Scheduler::State {
 
   void prepare_segments(EmitterState& e, std::size_t global)
   {
-    e.segments = segment_count(global);
+    e.segments = segment_count(e, global);
     e.pool = options.registration == Registration::segmented_lock ? std::size_t(spill_pool_items(e, e.segments)) : 0;
     const std::size_t bytes = std::size_t(segment_items(e, e.segments)) * spec(e.stream).element_bytes;
     // Segments still held from this run's overflowing execution are written anew: kept
@@ -893,7 +900,7 @@ struct Scheduler::State {
           if (r.stream == s) r.queued = false;
     std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     for (StreamId s : p.spec->also_over) n += state(s).count;
-    const std::size_t wg = context.work_group_size();
+    const std::size_t wg = group_of(*p.spec);
     const std::size_t global = round_up(n, wg);
     const std::string& label = p.spec->name;
     if (p.list && !p.list->settled) {
@@ -911,7 +918,7 @@ struct Scheduler::State {
       if (p.spec->culls()) restore(p.spec->cull_target);
       for (auto& e : p.emitters) {
         if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(e);
-        forget_stale_plan(e, segment_count(global));
+        forget_stale_plan(e, segment_count(e, global));
         if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
             !(release_idle_scratch() && segments_fit(e, global)))
           fall_back_to_global_counter(p);
@@ -1813,6 +1820,7 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
       EmitterState es;
       es.stream = e;
       es.expected = spec.expected_items(e);
+      es.group = s.group_of(spec);
       for (const auto& [input, output] : spec.handovers)
         if (output == e) es.handed_from = input;
       es.overflow_slot = slots++;

@@ -259,19 +259,26 @@ TEST_CASE("a pass that emits in any order registers through the global counter, 
     }
 }
 
-// One pass that expands values into pairs, through segmented locks. run(v) runs `v`,
-// checks every item and the merge's order by group, and returns the pass's reruns.
+// One pass that expands values into pairs, through segmented locks, in groups of
+// `group` work-items (0: the context's). run(v) runs `v`, checks every item and the
+// merge's order by group, and returns the pass's reruns.
 struct SegmentedExpansion {
   static constexpr std::size_t n = 20000;
   Context& ctx = cstreams::test::device();
-  const std::size_t wg = ctx.work_group_size();
+  const std::size_t wg;
   StreamGraph g;
   const StreamId values = g.fixed("values", 4, n), pairs = g.variable("pairs", 8, 1);
   std::unique_ptr<Scheduler> s;
 
-  SegmentedExpansion()
+  explicit SegmentedExpansion(std::size_t group = 0)
+      : wg(group ? std::min(group, ctx.work_group_size()) : ctx.work_group_size())
   {
-    g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+    g.pass("expand", {program, "test_expand"})
+        .launch_over(values)
+        .work_group(group)
+        .emit(pairs)
+        .arg(buffer_of(values))
+        .arg(count_of(values));
     s = std::make_unique<Scheduler>(ctx, g, SchedulerOptions{Registration::segmented_lock, true});
   }
 
@@ -303,6 +310,24 @@ TEST_CASE("segmented-lock segments follow the last run, and what they cannot hol
   // least 16 items a work-item of one group), so the pass runs again, planned from this
   // run's counts.
   for (std::size_t i = 0; i < n / 2; ++i) v[i] = burst;
+  CHECK(e.run(v) == 1);
+  CHECK(e.run(v) == 0);
+}
+
+// A pass in groups of its own (a kernel heavy in registers) has a segment a group of
+// them: a segment a group of the context's would leave groups without one.
+TEST_CASE("a pass launched in smaller groups than the context's registers in a segment for each of them",
+          "[runtime][scheduler][quick]")
+{
+  SegmentedExpansion e(std::max<std::size_t>(cstreams::test::device().work_group_size() / 4, 1));
+  const std::size_t n = e.n, wg = e.wg;
+  REQUIRE(wg * 4 == e.ctx.work_group_size());
+  auto v = random_values(n, 7);
+  e.run(v);
+  CHECK(e.run(v) == 0);
+  for (std::size_t i = 5 * wg; i < 5 * wg + 12; ++i) v[i] = cstreams::test::value_emitting(40);
+  CHECK(e.run(v) == 0);
+  for (std::size_t i = 0; i < n / 2; ++i) v[i] = cstreams::test::value_emitting(40);
   CHECK(e.run(v) == 1);
   CHECK(e.run(v) == 0);
 }

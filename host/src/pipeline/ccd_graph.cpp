@@ -477,7 +477,7 @@ struct GraphBuilder {
 
   // The culls of the orphan pairs, then the front update (or search from fixed seeds)
   // down to triangle pairs and their decomposition into feature pairs.
-  void broad_phase(std::size_t front_size, bool bounded_loops)
+  void broad_phase(std::size_t front_size, const GraphDevice& device)
   {
     using namespace runtime;
     const std::size_t nf = t.faces.size();
@@ -530,7 +530,7 @@ struct GraphBuilder {
                        .launch_over(s.front)
                        .read(s.node_boxes)
                        .write(s.searches_cut);
-    if (bounded_loops) update.stop_if(s.searches_cut);
+    if (device.bounded_loops) update.stop_if(s.searches_cut);
     // The next front is packed into the buffer of the one it came from. A front pair
     // mostly stays one pair (or becomes its children where the boxes start to overlap)
     // and finds at most about one triangle pair: what sizes the segments of the first
@@ -549,8 +549,13 @@ struct GraphBuilder {
     // five real steps: what sizes the segments of a first run. (Two of each, as before,
     // set cloth-ball's run peak, at its first step: 201 MiB, where a settled step
     // holds 192.)
+    // On the H200 the decomposition takes 72 registers a work-item: seven groups of 128
+    // fit on a compute unit where three of 256 do, 896 work-items against 768, and its
+    // scattered reads wait less. A CPU runs a group's work-items one after another and
+    // keeps the context's groups.
     g.pass("decompose", {program, "cs_decompose", front_option})
         .launch_over(s.triangle_pairs)
+        .work_group(device.cpu ? 0 : 128)
         .emit(s.vf, 1)
         .emit(s.ee, 2)
         .arg(buffer_of(s.triangle_pairs))
@@ -639,7 +644,7 @@ CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& optio
   b.bounds_and_refit(device.work_group_size, refit);
   b.out.refit_ranges = std::move(refit.ranges);
   if (!layout.seeds.empty()) {
-    b.broad_phase(front_size, device.bounded_loops);
+    b.broad_phase(front_size, device);
     b.elementary_tests(device);
     b.earliest_toi();
   }

@@ -105,6 +105,7 @@ struct PassSpec {
   StreamId over;                      // one work-item per item of this stream (and of
   std::vector<StreamId> also_over;    // these, after it, in order), or
   std::size_t items = 0;              // this many work-items when `over` is not set
+  std::size_t group = 0;              // work_group(); 0: the context's
   std::vector<StreamId> reads;
   std::vector<StreamId> writes;       // fixed-length outputs
   std::vector<StreamId> emits;        // variable-length outputs, through registration
@@ -130,6 +131,11 @@ struct PassSpec {
     return *this;
   }
   PassSpec& launch_items(std::size_t n) { items = n; return *this; }
+  // Launches in groups of at most `work_items` (the context's size where that is
+  // smaller), and registers its emissions in segments of such groups. Groups that share
+  // nothing but appends let a kernel heavy in registers fit more of them on a compute
+  // unit; its kernel must not size or stride by CS_WG_SIZE, the program's group size.
+  PassSpec& work_group(std::size_t work_items) { group = work_items; return *this; }
   bool launches_over_stream() const { return over.index != 0xffffffffu; }
   PassSpec& read(StreamId s) { reads.push_back(s); return *this; }
   PassSpec& write(StreamId s) { writes.push_back(s); return *this; }
