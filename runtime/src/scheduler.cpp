@@ -646,13 +646,16 @@ struct Scheduler::State {
   // burst of 16 items a work-item, whichever is more (16 a group took 9 MiB of n-body's
   // step at its peak, and none spilled). A pool that overflows grows fourfold for the
   // next run; a rerun, planned from its own input, spills nothing. A group the plan
-  // lacks gets 16 items.
+  // lacks gets 16 items where it has the context's size, and as many fewer as it has
+  // fewer work-items: the decomposition's first run in groups of 128 held 9 MiB more
+  // on n-body at 16 a group, with each spilled item's two words of place.
   std::uint64_t spill_pool_items(const EmitterState& e, std::size_t segments) const
   {
     const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
     const std::uint64_t least =
         planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * e.group) : 0;
-    return std::max(least, 2 * spilled) + (segments - planned) * spill_per_group;
+    const std::uint64_t unplanned = std::max<std::uint64_t>(1, spill_per_group * e.group / context.work_group_size());
+    return std::max(least, 2 * spilled) + (segments - planned) * unplanned;
   }
 
   // Segments follow the last run, so one burst (a first step searched from the roots,
