@@ -400,16 +400,9 @@ TEST_CASE("an exact front tracked over many steps is the one a search from the r
   options.front = FrontMode::exact;
   constexpr std::size_t first = 10, last = 29;
   Detector tracked(cstreams::test::device(), describe(cloth, first), options);
-  for (std::size_t frame = first; frame < last; ++frame) {
-    for (std::uint32_t o = 0; o < cloth.objects.size(); ++o)
-      if (cloth.objects[o].kind != ObjectKind::static_) tracked.set_positions(o, cloth.positions(o, frame + 1));
-    tracked.detect();
-  }
+  for (std::size_t frame = first; frame < last; ++frame) run_step(tracked, load_step(cloth, frame));
   Detector searched(cstreams::test::device(), describe(cloth, first), options);
-  for (std::uint32_t o = 0; o < cloth.objects.size(); ++o)
-    if (cloth.objects[o].kind != ObjectKind::static_)
-      searched.set_step(o, cloth.positions(o, last - 1), cloth.positions(o, last));
-  searched.detect();
+  run_step(searched, load_step(cloth, last - 1));
   CHECK(tracked.stats().front_pairs > 0);
   CHECK(searched.stats().front_pairs == tracked.stats().front_pairs);
   CHECK(searched.stats().triangle_pairs == tracked.stats().triangle_pairs);
