@@ -361,13 +361,15 @@ std::vector<Timeline::Entry> Timeline::resolve() const
   cl_event last = pending_.back().event.get();
   check(clWaitForEvents(1, &last), "clWaitForEvents", "profiling " + pending_.back().label);
   for (const auto& p : pending_) {
-    cl_ulong start = 0, end = 0;
+    cl_ulong queued = 0, start = 0, end = 0;
     const auto describe = [&] { return "profiling " + p.label; };
+    check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_QUEUED, sizeof(queued), &queued, nullptr),
+               "clGetEventProfilingInfo", describe);
     check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr),
                "clGetEventProfilingInfo", describe);
     check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr),
                "clGetEventProfilingInfo", describe);
-    entries.push_back({p.label, end > start ? end - start : 0, start, end});
+    entries.push_back({p.label, end > start ? end - start : 0, queued, start, end});
   }
   return entries;
 }

@@ -1737,7 +1737,8 @@ struct Scheduler::State {
   void collect_stats()
   {
     std::map<std::string, std::uint64_t> by_label;
-    for (const auto& e : timeline.resolve()) {
+    stats.commands = timeline.resolve();
+    for (const auto& e : stats.commands) {
       by_label[e.label] += e.nanoseconds;
       stats.span.add(e.start, e.end);
     }

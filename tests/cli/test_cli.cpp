@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -182,12 +183,15 @@ TEST_CASE("run --no-profile reports the same contacts, its wall time and no devi
   CHECK(report["median_host_ms"].get<double>() > 0);
   CHECK(report["steps"][0]["passes"]["front update"]["ms"].is_null());
   CHECK(report["steps"][0]["device_span_ms"].is_null());
+  CHECK(report["steps"][0]["commands"].empty());
 }
 
 // The device's span of a step holds its passes one after another (one in-order queue)
 // and the idle time between them: no shorter than their sum, and within the step's
-// wall time.
-TEST_CASE("run --json gives each step's device span around its passes' time", "[cli][quick]")
+// wall time. Its commands, each timed, show where that idle time went: every launch and
+// blocking read of the step, in queue order, and each pass's time is its commands'.
+TEST_CASE("run --json gives each step's device span around its passes' time, and each command in it",
+          "[cli][quick]")
 {
   const fs::path dir = fresh_dir("cstreams-cli-span");
   execute({"run", funnel_frame("227.ply"), funnel_frame("228.ply"), "--repeat", "3", "--json",
@@ -195,12 +199,38 @@ TEST_CASE("run --json gives each step's device span around its passes' time", "[
   const auto step = nlohmann::json::parse(std::ifstream(dir / "run.json"))["steps"][0];
   if (step["device_ms"].is_null()) {  // a device without a kernel timer (rusticl on llvmpipe)
     CHECK(step["device_span_ms"].is_null());
+    CHECK(step["commands"].empty());
     return;
   }
   const double device = step["device_ms"].get<double>(), span = step["device_span_ms"].get<double>();
   CHECK(device > 0);
   CHECK(span >= device);
   CHECK(span <= step["host_ms"].get<double>());
+
+  const auto& commands = step["commands"];
+  REQUIRE_FALSE(commands.empty());
+  CHECK(commands[0]["start_us"].get<double>() == 0);
+  unsigned launches = 0, reads = 0;
+  std::map<std::string, double> pass_us;
+  double ended = 0;
+  for (const auto& c : commands) {
+    const std::string what = c["what"];
+    const double queued = c["queued_us"], start = c["start_us"], end = c["end_us"];
+    CHECK(queued <= start);
+    CHECK(start <= end);
+    CHECK(start >= ended);
+    ended = end;
+    if (what == "readback") {
+      ++reads;
+    } else if (what != "fill" && what != "copy" && what != "upload") {
+      ++launches;
+      pass_us[what] += end - start;
+    }
+  }
+  CHECK(launches == step["launches"].get<unsigned>());
+  CHECK(reads == step["blocking_reads"].get<unsigned>());
+  for (const auto& [name, pass] : step["passes"].items())
+    CHECK(pass["ms"].get<double>() * 1e3 == Approx(pass_us[name]).margin(1e-3));
 }
 
 TEST_CASE("run --earliest-only gives the earliest time without reading or sorting the contacts", "[cli][quick]")

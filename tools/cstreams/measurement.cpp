@@ -30,6 +30,15 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
                                    {"segment_bytes", p.segment_bytes}};
     if (p.rounds) pass.update({{"rounds", p.rounds}, {"list_items", p.list_items}, {"widest_list", p.widest_list}});
   }
+  // Every command of the step on the device's clock, in microseconds from the first
+  // one's start: where the device waited for the host (before a command was queued) and
+  // for a launch (between its queueing and its start).
+  nlohmann::json commands = nlohmann::json::array();
+  if (timed)
+    for (const auto& c : s.run.commands) {
+      const auto us = [&](std::uint64_t t) { return (double(t) - double(s.run.span.start)) * 1e-3; };
+      commands.push_back({{"what", c.label}, {"queued_us", us(c.queued)}, {"start_us", us(c.start)}, {"end_us", us(c.end)}});
+    }
   for (const auto& st : s.run.streams)
     streams[st.name] = {{"count", st.count},
                         {"items", st.items},
@@ -56,7 +65,8 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
           {"slices", s.run.slices},
           {"sliced_pass", s.run.sliced_pass},
           {"passes", passes},
-          {"streams", streams}};
+          {"streams", streams},
+          {"commands", commands}};
 }
 
 }  // namespace

@@ -60,7 +60,7 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
 }
 
 ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
-                                  runtime::PassStats& stats, runtime::DeviceSpan& span)
+                                  runtime::PassStats& stats, std::vector<runtime::Timeline::Entry>& commands)
 {
   stats = runtime::PassStats{};
   stats.name = "canonical contacts";
@@ -118,9 +118,9 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   stats.launches = unsigned(context_.kernel_launches() - launches);
   runtime::ensure_capacity(context_, staging_, contact_bytes, "contacts");
   context_.read(contacts, staging_.data(), contact_bytes, 0, events);
-  for (const auto& e : timeline.resolve()) {
+  for (auto& e : timeline.resolve()) {
     if (e.label == stats.name) stats.device_ns += e.nanoseconds;
-    span.add(e.start, e.end);
+    commands.push_back(std::move(e));
   }
   // The read wrote Contacts' bytes into memory the host never constructed objects in:
   // Contact is trivially copyable, an implicit-lifetime type (P0593), so the read

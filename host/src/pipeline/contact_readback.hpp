@@ -13,6 +13,7 @@
 #include <cstreams/runtime/scheduler.hpp>
 
 #include <string>
+#include <vector>
 
 namespace cstreams {
 
@@ -31,13 +32,13 @@ public:
 
   // The contacts of the scheduler's last run, in canonical order, where the read put
   // them: valid until the next read. `stats` receives the device time (with `profile`)
-  // and the launches it took, and `span` its commands, the read included. Its device
-  // scratch (records, the sort's, the Contacts) is lent by the scheduler's step arena
-  // between runs; without one that holds it, the read takes scratch of its own and gives
-  // it back, and short of device memory for it has the scheduler give back its idle
-  // scratch.
+  // and the launches it took, and `commands` gains its commands, the read included.
+  // Its device scratch (records, the sort's, the Contacts) is lent by the scheduler's
+  // step arena between runs; without one that holds it, the read takes scratch of its
+  // own and gives it back, and short of device memory for it has the scheduler give
+  // back its idle scratch.
   ContactSpan read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats,
-                   runtime::DeviceSpan& span);
+                   std::vector<runtime::Timeline::Entry>& commands);
 
 private:
   runtime::Context& context_;

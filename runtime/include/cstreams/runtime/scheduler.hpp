@@ -56,6 +56,7 @@ struct RunStats {
   std::vector<StreamStats> streams; // in declaration order
   std::uint64_t scheduler_ns = 0;   // counter clears and readbacks
   DeviceSpan span;                  // of everything the run recorded (profiling on)
+  std::vector<Timeline::Entry> commands;  // and each of those commands, in queue order
   unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
   std::size_t scratch_bytes = 0;    // segments (each buffer once), flags, offsets and scan levels
   std::size_t segment_bytes = 0;    // the registration segments alone, each buffer once

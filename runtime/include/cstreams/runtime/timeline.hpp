@@ -26,7 +26,11 @@ public:
   struct Entry {
     std::string label;
     std::uint64_t nanoseconds = 0;
-    std::uint64_t start = 0, end = 0;  // on the device's clock
+    // On the device's clock: when the host queued the command, and when it ran. A
+    // command queued after its device had gone idle shows the host's turnaround (from
+    // the previous command's end to its queueing) apart from the launch latency (from
+    // its queueing to its start).
+    std::uint64_t queued = 0, start = 0, end = 0;
   };
 
   void record(std::string label, Handle<cl_event> event);
