@@ -91,6 +91,7 @@ DeviceInfo describe(cl_platform_id platform, cl_device_id id, std::size_t p, std
     info.fp64_extension = "cl_amd_fp64";
   info.fp64 = !info.fp64_extension.empty();
   info.int64_atomics = has("cl_khr_int64_base_atomics");
+  info.register_caps = has("cl_nv_compiler_options");
   info.correctly_rounded_divide_sqrt =
       (device_value<cl_device_fp_config>(id, CL_DEVICE_SINGLE_FP_CONFIG) & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
   return info;
@@ -144,6 +145,11 @@ bool DeviceInfo::is_pocl() const
 {
   return contains(platform_name, "portable computing language") || contains(platform_version, "pocl");
 }
+std::string register_cap_option(const DeviceInfo& device, unsigned registers)
+{
+  return device.register_caps ? " -cl-nv-maxrregcount=" + std::to_string(registers) : std::string();
+}
+
 bool DeviceInfo::is_nvidia() const { return contains(vendor, "nvidia") || contains(platform_name, "nvidia"); }
 bool DeviceInfo::is_amd() const
 {
@@ -231,6 +237,7 @@ DeviceInfo apply_profile(DeviceInfo device, std::string_view profile)
   device.local_memory = std::min<std::size_t>(device.local_memory, 32 * 1024);
   device.max_work_group_size = std::min<std::size_t>(device.max_work_group_size, 256);
   device.int64_atomics = false;
+  device.register_caps = false;
   device.profile = name;
   return device;
 }

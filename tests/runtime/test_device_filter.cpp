@@ -79,7 +79,7 @@ TEST_CASE("the HD 5870 profile lowers what a device offers to that card's, and n
   big.max_allocation = std::size_t(35) << 30;
   big.local_memory = 48 << 10;
   big.max_work_group_size = 1024;
-  big.fp64 = big.int64_atomics = true;
+  big.fp64 = big.int64_atomics = big.register_caps = true;
   big.fp64_extension = "cl_khr_fp64";
   const DeviceInfo hd = apply_profile(big, "HD5870");
   CHECK(hd.global_memory == std::size_t(1) << 30);
@@ -87,6 +87,9 @@ TEST_CASE("the HD 5870 profile lowers what a device offers to that card's, and n
   CHECK(hd.local_memory == 32 << 10);
   CHECK(hd.max_work_group_size == 256);
   CHECK(!hd.int64_atomics);
+  // The card's compiler takes no register cap: its programs build with none.
+  CHECK(register_cap_option(big, 32) == " -cl-nv-maxrregcount=32");
+  CHECK(register_cap_option(hd, 32).empty());
   CHECK(hd.fp64);
   CHECK(hd.profile == "hd5870");
 

@@ -45,7 +45,8 @@ nlohmann::json to_json(const DeviceInfo& d, bool selected)
           {"max_allocation_bytes", d.max_allocation},
           {"max_work_group_size", d.max_work_group_size},
           {"fp64", d.fp64},
-          {"int64_atomics", d.int64_atomics}};
+          {"int64_atomics", d.int64_atomics},
+          {"register_caps", d.register_caps}};
 }
 
 void print_text(const DeviceInfo& d, bool selected)
@@ -62,6 +63,7 @@ void print_text(const DeviceInfo& d, bool selected)
   std::printf("    work-group     %zu work-items at most\n", d.max_work_group_size);
   std::printf("    fp64           %s\n", d.fp64 ? "yes" : "no");
   std::printf("    64-bit atomics %s\n", d.int64_atomics ? "yes" : "no");
+  std::printf("    register caps  %s\n", d.register_caps ? "yes" : "no");
 }
 
 void run(const DevicesOptions& options)

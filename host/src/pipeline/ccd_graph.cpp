@@ -483,7 +483,8 @@ struct GraphBuilder {
     const std::size_t nf = t.faces.size();
     const char* program = "ccd/broad_phase.cl";
     const bool keep_front = options.front != FrontMode::none;
-    // One build of the program serves all its passes.
+    // One build of the program serves both its passes, two where their registers are
+    // capped apart (GraphDevice).
     const std::string front_option = "-DCS_KEEP_FRONT=" + std::to_string(int(keep_front));
     const std::size_t guess = sized(std::max<std::size_t>(1024, nf));
     s.face_edges = g.fixed("face edges", 12, nf);
@@ -526,7 +527,8 @@ struct GraphBuilder {
     if (PassSpec* cull = cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs",
                                       s.orphan_ee, s.kept_ee))
       cull->arg(buffer_of(s.edge_boxes));
-    auto& update = g.pass(keep_front ? "front update" : "search from seeds", {program, "cs_front_update", front_option})
+    auto& update = g.pass(keep_front ? "front update" : "search from seeds",
+                          {program, "cs_front_update", front_option + device.front_update_options})
                        .launch_over(s.front)
                        .read(s.node_boxes)
                        .write(s.searches_cut);
@@ -553,7 +555,7 @@ struct GraphBuilder {
     // fit on a compute unit where three of 256 do, 896 work-items against 768, and its
     // scattered reads wait less. A CPU runs a group's work-items one after another and
     // keeps the context's groups.
-    g.pass("decompose", {program, "cs_decompose", front_option})
+    g.pass("decompose", {program, "cs_decompose", front_option + device.decompose_options})
         .launch_over(s.triangle_pairs)
         .work_group(device.cpu ? 0 : 128)
         .emit(s.vf, 1)
@@ -631,6 +633,13 @@ GraphDevice graph_device(const runtime::Context& context)
   on.work_group_size = context.work_group_size();
   on.cpu = context.device().kind == runtime::DeviceKind::cpu;
   on.bounded_loops = context.loop_trip_limit() != 0;
+  // Capped registers let more work-items share a compute unit. On the H200 the front
+  // update takes 38 registers (six groups of 256 an SM), at most 32 eight: cloth-ball
+  // 0.338 -> 0.313 ms, n-body 0.455 -> 0.416; the decomposition 72 (seven groups of
+  // 128), at most 64 eight: 0.225 -> 0.222, 0.333 -> 0.322. Lower caps spill: at 24 the
+  // front update took 0.358 ms, at 48 the decomposition 0.258 and 0.361 (BENCHMARKS.md).
+  on.front_update_options = runtime::register_cap_option(context.device(), 32);
+  on.decompose_options = runtime::register_cap_option(context.device(), 64);
   return on;
 }
 

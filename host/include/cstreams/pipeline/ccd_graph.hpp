@@ -151,6 +151,9 @@ struct GraphDevice {
                                        // its state rather than making it again for each box
   bool bounded_loops = false;          // the device ends loops early: the front update stops
                                        // the run when a search ran out of loop trips (RunStopped)
+  // Build options of the front update's and the decomposition's programs beyond the
+  // scene's: register caps where the device's compiler takes them (graph_device()).
+  std::string front_update_options, decompose_options;
 };
 
 // What the graph takes from the device of `context`.

@@ -35,6 +35,7 @@ struct DeviceInfo {
   bool fp64 = false;
   std::string fp64_extension;  // cl_khr_fp64, or cl_amd_fp64 where only that is offered
   bool int64_atomics = false;  // cl_khr_int64_base_atomics
+  bool register_caps = false;  // cl_nv_compiler_options: a build option caps a kernel's registers
   std::string profile;         // the device profile it runs under (apply_profile), or empty
   bool correctly_rounded_divide_sqrt = false;
   bool profiling_timer = true;  // profiling events time kernels (learnt by a Context)
@@ -47,6 +48,10 @@ struct DeviceInfo {
 };
 
 const char* to_string(DeviceKind kind) noexcept;
+
+// The build option that caps the registers of each work-item of a program's kernels at
+// `registers`, where the device's compiler takes one (register_caps); empty elsewhere.
+std::string register_cap_option(const DeviceInfo& device, unsigned registers);
 
 // Every device of every platform, in platform then device order. A machine without
 // any OpenCL platform gives an empty list, not an error.
