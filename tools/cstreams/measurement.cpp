@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -36,7 +37,11 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
   nlohmann::json commands = nlohmann::json::array();
   if (timed)
     for (const auto& c : s.run.commands) {
-      const auto us = [&](std::uint64_t t) { return (double(t) - double(s.run.span.start)) * 1e-3; };
+      // Apart in integers first: a device clock counts from its epoch, past what a
+      // double holds to the nanosecond.
+      const auto us = [&](std::uint64_t t) {
+        return double(std::int64_t(t) - std::int64_t(s.run.span.start)) * 1e-3;
+      };
       commands.push_back({{"what", c.label}, {"queued_us", us(c.queued)}, {"start_us", us(c.start)}, {"end_us", us(c.end)}});
     }
   for (const auto& st : s.run.streams)
