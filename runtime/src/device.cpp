@@ -145,11 +145,6 @@ bool DeviceInfo::is_pocl() const
 {
   return contains(platform_name, "portable computing language") || contains(platform_version, "pocl");
 }
-std::string register_cap_option(const DeviceInfo& device, unsigned registers)
-{
-  return device.register_caps ? " -cl-nv-maxrregcount=" + std::to_string(registers) : std::string();
-}
-
 bool DeviceInfo::is_nvidia() const { return contains(vendor, "nvidia") || contains(platform_name, "nvidia"); }
 bool DeviceInfo::is_amd() const
 {
@@ -240,6 +235,11 @@ DeviceInfo apply_profile(DeviceInfo device, std::string_view profile)
   device.register_caps = false;
   device.profile = name;
   return device;
+}
+
+std::string register_cap_option(const DeviceInfo& device, unsigned registers)
+{
+  return device.register_caps ? " -cl-nv-maxrregcount=" + std::to_string(registers) : std::string();
 }
 
 std::string profile_from_environment()

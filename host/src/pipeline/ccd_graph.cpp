@@ -634,10 +634,11 @@ GraphDevice graph_device(const runtime::Context& context)
   on.cpu = context.device().kind == runtime::DeviceKind::cpu;
   on.bounded_loops = context.loop_trip_limit() != 0;
   // Capped registers let more work-items share a compute unit. On the H200 the front
-  // update takes 38 registers (six groups of 256 an SM), at most 32 eight: cloth-ball
-  // 0.338 -> 0.313 ms, n-body 0.455 -> 0.416; the decomposition 72 (seven groups of
-  // 128), at most 64 eight: 0.225 -> 0.222, 0.333 -> 0.322. Lower caps spill: at 24 the
-  // front update took 0.358 ms, at 48 the decomposition 0.258 and 0.361 (BENCHMARKS.md).
+  // update takes 38 registers a work-item, so six groups of 256 share an SM; capped at
+  // 32, eight do: cloth-ball 0.338 -> 0.313 ms, n-body 0.455 -> 0.416. The
+  // decomposition takes 72, seven groups of 128; capped at 64, eight: 0.225 -> 0.222,
+  // 0.333 -> 0.322. Lower caps spill: at 24 the front update took 0.358 ms, at 48 the
+  // decomposition 0.258 and 0.361 (BENCHMARKS.md).
   on.front_update_options = runtime::register_cap_option(context.device(), 32);
   on.decompose_options = runtime::register_cap_option(context.device(), 64);
   return on;
