@@ -1738,10 +1738,7 @@ struct Scheduler::State {
   {
     std::map<std::string, std::uint64_t> by_label;
     stats.commands = timeline.resolve();
-    for (const auto& e : stats.commands) {
-      by_label[e.label] += e.nanoseconds;
-      stats.span.add(e.start, e.end);
-    }
+    for (const auto& e : stats.commands) by_label[e.label] += e.nanoseconds;
     std::uint64_t pass_total = 0;
     // Segments are shared between stages: the run's total counts each buffer once, and
     // once the run is over they are all idle.

@@ -35,15 +35,13 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
   // one's start: where the device waited for the host (before a command was queued) and
   // for a launch (between its queueing and its start).
   nlohmann::json commands = nlohmann::json::array();
+  // Apart in integers first: a device clock counts from its epoch, past what a double
+  // holds to the nanosecond.
+  const std::int64_t first = std::int64_t(s.run.span().start);
+  const auto us = [&](std::uint64_t t) { return double(std::int64_t(t) - first) * 1e-3; };
   if (timed)
-    for (const auto& c : s.run.commands) {
-      // Apart in integers first: a device clock counts from its epoch, past what a
-      // double holds to the nanosecond.
-      const auto us = [&](std::uint64_t t) {
-        return double(std::int64_t(t) - std::int64_t(s.run.span.start)) * 1e-3;
-      };
+    for (const auto& c : s.run.commands)
       commands.push_back({{"what", c.label}, {"queued_us", us(c.queued)}, {"start_us", us(c.start)}, {"end_us", us(c.end)}});
-    }
   for (const auto& st : s.run.streams)
     streams[st.name] = {{"count", st.count},
                         {"items", st.items},

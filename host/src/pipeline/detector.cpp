@@ -466,14 +466,11 @@ void Detector::run_step(Report report)
   stats.run = q.stats();
   if (report == Report::contacts) {
     runtime::PassStats readback;
-    const std::size_t before = stats.run.commands.size();
     s.contacts = s.readback.read(q, st, s.options.profile, readback, stats.run.commands);
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
-    for (std::size_t c = before; c < stats.run.commands.size(); ++c)
-      stats.run.span.add(stats.run.commands[c].start, stats.run.commands[c].end);
   }
-  stats.device_span_ns = stats.run.span.nanoseconds();
+  stats.device_span_ns = stats.run.span().nanoseconds();
   s.end_step();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();

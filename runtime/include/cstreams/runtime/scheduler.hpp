@@ -55,14 +55,20 @@ struct RunStats {
   std::vector<PassStats> passes;    // in execution order
   std::vector<StreamStats> streams; // in declaration order
   std::uint64_t scheduler_ns = 0;   // counter clears and readbacks
-  DeviceSpan span;                  // of everything the run recorded (profiling on)
-  std::vector<Timeline::Entry> commands;  // and each of those commands, in queue order
+  std::vector<Timeline::Entry> commands;  // every command the run recorded (profiling on), in queue order
   unsigned readbacks = 0;           // blocking counter transfers: one per stage and rerun
   std::size_t scratch_bytes = 0;    // segments (each buffer once), flags, offsets and scan levels
   std::size_t segment_bytes = 0;    // the registration segments alone, each buffer once
   unsigned slices = 1;              // of the sliced pass's input (1: not sliced, or in one slice)
   std::string sliced_pass;          // the pass whose input went in slices (of the global
                                     // counter, one where it fitted one), if any
+  // From the first command's start to the last one's end.
+  DeviceSpan span() const
+  {
+    DeviceSpan s;
+    for (const auto& c : commands) s.add(c.start, c.end);
+    return s;
+  }
 };
 
 // Runs a StreamGraph on one device. It builds every kernel at construction, owns the
