@@ -236,6 +236,7 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
                              __global uint* counts, const uint capacity)
 {
   const uint i = get_global_id(0);
+  cs_worklist_seed_begin(counts, n);
   if (i >= n) return;
   const uint4 pair = queries[i];
   cs_refine_state s;
@@ -271,7 +272,7 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
     cs_item more = root;
     more.box.t0 = lo[k];
     more.box.t1 = hi[k];
-    const uint at = cs_worklist_seed_index(counts, capacity);
+    const uint at = cs_worklist_seed_index(counts, n, capacity);
     if (at < capacity) list[at] = more;
   }
 #if CS_EARLIEST_ACROSS
@@ -309,7 +310,7 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
       guess.box.t0 = fmax(guess.box.t0, lo[0]);
       guess.box.t1 = fmin(guess.box.t1, hi[runs - 1]);
       if (guess.box.t0 < guess.box.t1) {
-        const uint at = cs_worklist_seed_index(counts, capacity);
+        const uint at = cs_worklist_seed_index(counts, n, capacity);
         if (at < capacity) list[at] = guess;
       }
     }

@@ -12,8 +12,11 @@
  *     for (uint j = 0; j < k; ++j) if (cs_worklist_fits(counts, capacity, at + j)) out[at + j] = ...;
  *   }
  *
- * counts[r % 3] holds the items of round r (a seed's extra first items add to
- * counts[0]). Round r appends to counts[(r + 1) % 3] and clears counts[(r + 2) % 3],
+ * The counts start as zeros, and the seed sets them up itself: every seed calls
+ * cs_worklist_seed_begin, which counts its n first items in counts[0] and sets
+ * counts[9], so the host writes nothing before a seed. counts[r % 3] holds the items of
+ * round r: a seed's extra first items add to counts[0] too, and go after the n first
+ * ones, where counts[12] places them. Round r appends to counts[(r + 1) % 3] and clears counts[(r + 2) % 3],
  * which round r - 1 read and round r + 1 appends to, so no launch is needed between
  * rounds. An append past the capacity writes nothing and raises counts[3] to the
  * capacity it needed. The round after one that overflowed finds more items than the
@@ -77,12 +80,22 @@ inline int cs_worklist_fits(__global uint* counts, const uint capacity, const ui
   return 0;
 }
 
-/* Where a seed writes a first item beyond its input's own list[i]: an index below the
- * capacity, or the capacity itself where the list is full (the host then grows it and
- * starts again from the seed). */
-inline uint cs_worklist_seed_index(__global uint* counts, const uint capacity)
+/* Every work-item of a seed over n inputs, before its first items. */
+inline void cs_worklist_seed_begin(__global uint* counts, const uint n)
 {
-  const uint at = atomic_inc(&counts[0]);
+  if (get_global_id(0) == 0) {
+    atomic_add(&counts[0], n);
+    counts[9] = 1u;
+  }
+}
+
+/* Where a seed over n inputs writes a first item beyond its input's own list[i]: an
+ * index below the capacity, or the capacity itself where the list is full (the host
+ * then grows it and starts again from the seed). */
+inline uint cs_worklist_seed_index(__global uint* counts, const uint n, const uint capacity)
+{
+  atomic_inc(&counts[0]);
+  const uint at = n + atomic_inc(&counts[12]);
   return cs_worklist_fits(counts, capacity, at) ? at : capacity;
 }
 

@@ -85,7 +85,7 @@ constexpr std::size_t own_offsets_most_segments = 8192;
 constexpr std::size_t most_merged_per_group = 64;
 
 // A work list's device side (Worklist in stream_graph.hpp).
-constexpr std::size_t list_words = 12;
+constexpr std::size_t list_words = 13;
 constexpr std::size_t list_count_bytes = list_words * sizeof(std::uint32_t);
 
 // Work lists and list states this small stay, however little a run needs: giving them
@@ -96,15 +96,14 @@ struct ListState {
   Kernel seed, round;
   Buffer state;
   Buffer lists[2];  // ping-pong: round r reads lists[r % 2] and appends to the other
-  Buffer counts;    // cl_kernels/runtime/worklist.h: counts[list_words]
-  // Host memory for the queued transfers of the counts, pinned: read into pageable
-  // memory, the queued read left an H200 idle longer rather than shorter. It holds what
-  // a seed's counts start from, written without blocking (the write reads them until
-  // `start_written` completes), then the counts read after the last batch.
-  HostStaging host;
-  std::uint32_t* start_counts() const { return static_cast<std::uint32_t*>(host.data()); }
-  std::uint32_t* counts_read() const { return start_counts() + list_words; }
-  Handle<cl_event> start_written;
+  // cl_kernels/runtime/worklist.h's counts[list_words]: words of the scheduler's
+  // counters from `counts_at`, so that they start a run cleared with them, with nothing
+  // written before the seed, and come back with the stage's counter read rather than in
+  // a read of their own (the two cost an H200 ~20 us a conservative step). `counts`
+  // views them in `counters`, `next_counts` in `next_counters`, and they swap with them.
+  std::size_t counts_at = 0;
+  Buffer counts, next_counts;
+  bool counts_clear = false;  // the counts hold zeros: a seed may start
   std::size_t capacity = 0;
   std::size_t released = 0;  // the capacity the lists had when memory pressure took them
   // The rounds the last runs needed, the next run's first batch the most of them: a run
@@ -117,8 +116,8 @@ struct ListState {
   // Where this run's rounds stand: the next batch, and whether they start from the seed.
   bool reseed = true;
   unsigned at_round = 0, batch = 0, next_batch = 0;
-  // Where `awaiting`, the read of the counts after the last batch is queued, and the
-  // stage's counter read, after it on the queue, brings them (refine()).
+  // Where `awaiting`, the stage's counter read brings the counts after the last batch
+  // (refine()).
   bool awaiting = false;
   void restart()
   {
@@ -126,7 +125,10 @@ struct ListState {
     reseed = true;
   }
   // After a batch, as its counts say: its last round left nothing and none overflowed.
-  bool batch_finished() const { return counts_read()[3] <= capacity && counts_read()[at_round % 3] == 0; }
+  bool batch_finished(const std::uint32_t* counts) const
+  {
+    return counts[3] <= capacity && counts[at_round % 3] == 0;
+  }
 };
 
 struct PassState {
@@ -196,6 +198,8 @@ struct Scheduler::State {
   Buffer next_counters;
   bool next_counters_clear = false;
   std::vector<std::uint32_t> host_counters;
+  // A work list's counts as the last counter read (or list read) brought them.
+  std::uint32_t* counts_read(const ListState& l) { return host_counters.data() + l.counts_at; }
   // Fixed streams the next run to complete reads back as it ends
   // (Scheduler::read_after_run), and whether each read is queued after the last
   // execution of every pass that writes it.
@@ -758,9 +762,9 @@ struct Scheduler::State {
   // between which the host reads the counts once. A round that overflows the lists runs
   // again, as a replay (cl_kernels/runtime/worklist.h), once they have grown to what it
   // asked for with its input kept; a seed that overflows starts again.
-  // The read after a batch is queued rather than waited for, and the pass emits from
-  // the state as it stands: the stage's counter read then brings the counts too
-  // (flush, settle_list), which saves a round trip where the batch was the last; where
+  // The pass emits from the state as it stands after a batch, and the stage's counter
+  // read brings the counts with it (flush, settle_list), which saves a round trip where
+  // the batch was the last; where
   // it was not, the rounds go on from there and the pass emits again. On a device that
   // ends loops early, each round goes over exactly its items, one a work-item, so that
   // no work-item strides over many: the host waits for the counts after every round
@@ -791,18 +795,14 @@ struct Scheduler::State {
       if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes);
       l.released = 0;
     }
-    std::uint32_t* const counts = l.counts_read();
+    std::uint32_t* const counts = counts_read(l);
     do {
       if (l.reseed) {
         l.reseed = false;
-        // The seed's items, the loop canary's 1 (worklist.h) and zeros in one write:
-        // three fills took three commands of ~6 us each on the H100.
-        context.block_until({l.start_written});
-        std::uint32_t* start = l.start_counts();
-        std::fill(start, start + list_words, 0u);
-        start[0] = std::uint32_t(n);
-        start[9] = 1;
-        l.start_written = context.write_queued(l.counts, start, list_count_bytes, 0);
+        // The seed sets its counts up from zeros (worklist.h); those of a run's first
+        // seed were cleared with the run's counters.
+        if (!l.counts_clear) context.fill_u32(counters, 0, l.counts_at, list_words, tl());
+        l.counts_clear = false;
         unsigned a = bind_own_args(*p.spec, l.seed);
         l.seed.set_arg(a++, l.state);
         l.seed.set_arg(a++, l.lists[0]);
@@ -833,7 +833,6 @@ struct Scheduler::State {
         ++p.stats.launches;
       }
       if (!bounded_loops) {
-        context.read_queued(l.counts, counts, list_count_bytes);
         l.awaiting = true;
         return;
       }
@@ -850,14 +849,14 @@ struct Scheduler::State {
     const Worklist& w = *p.spec->worklist;
     ListState& l = *p.list;
     const std::string& label = p.spec->name;
-    std::uint32_t* const counts = l.counts_read();
+    std::uint32_t* const counts = counts_read(l);
     l.awaiting = false;
     // A search deeper than this is a kernel that never settles, not work.
     constexpr unsigned most_rounds = 1u << 20;
     if (counts[8])
       throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
                   std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
-    if (l.batch_finished()) {
+    if (l.batch_finished(counts)) {
       l.recent_rounds[l.runs_settled++ % l.recent_rounds.size()] = counts[7];
       p.stats.rounds += counts[7];
       p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
@@ -1193,6 +1192,18 @@ struct Scheduler::State {
     return host_counters[target.slot] > target.capacity;
   }
 
+  // Every counter of the run zero, the work lists' counts among them.
+  void clear_counters()
+  {
+    context.fill_u32(counters, 0, 0, host_counters.size(), tl());
+    lists_cleared();
+  }
+  void lists_cleared()
+  {
+    for (auto& p : passes)
+      if (p.list) p.list->counts_clear = true;
+  }
+
   // Reads every counter of the stage in one transfer; grows what overflowed and
   // reruns its producer until nothing did.
   void flush(const std::vector<PassState*>& stage)
@@ -1232,7 +1243,7 @@ struct Scheduler::State {
       // on (refine), and the pass emits again.
       for (PassState* p : stage)
         if (p->list && p->list->awaiting) {
-          if (p->list->batch_finished()) settle_list(*p);
+          if (p->list->batch_finished(counts_read(*p->list))) settle_list(*p);
           else p->list->settled = false;
         }
       // A pass whose outputs all fit is done: it packs its outputs that pack late now (its
@@ -1418,8 +1429,14 @@ struct Scheduler::State {
     for (const auto& p : passes)
       for (StreamId s : pass_outputs(*p.spec))
         if (spec(s).variable) state(s).known = false;
-    if (next_counters_clear) std::swap(counters, next_counters);
-    else context.fill_u32(counters, 0, 0, host_counters.size(), tl());
+    if (next_counters_clear) {
+      std::swap(counters, next_counters);
+      for (auto& p : passes)
+        if (p.list) std::swap(p.list->counts, p.list->next_counts);
+      lists_cleared();
+    } else {
+      clear_counters();
+    }
     next_counters_clear = false;
 
     // However the run ends (a stop, an error), no pass's scratch is busy afterwards:
@@ -1699,7 +1716,7 @@ struct Scheduler::State {
           whole.once.emplace_back(&state(s), state(s).count);
           state(s).count = 0;
         }
-      context.fill_u32(counters, 0, 0, host_counters.size(), tl());
+      clear_counters();
       for (std::size_t j = first; j < passes.size(); ++j) {
         if (k > 0 && !every_slice[j]) continue;
         if (passes[j].list) passes[j].list->restart();
@@ -1814,8 +1831,6 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
       auto& l = p.list.emplace();
       l.seed = s.build_kernel(spec, registration, w->seed);
       l.round = s.build_kernel(spec, registration, w->round);
-      l.counts = Buffer(context, list_count_bytes, "work list counts");
-      l.host = HostStaging(context, 2 * list_count_bytes, "work list counts");
     }
     for (StreamId e : spec.emits) {
       EmitterState es;
@@ -1832,9 +1847,22 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
     s.passes.push_back(std::move(p));
   }
   s.context.fill_u32(s.no_plan, 0, 0, 1);
-  s.host_counters.assign(std::max<std::uint32_t>(slots, 1), 0);
+  // The work lists' counts after the streams', each where a sub-buffer may start.
+  const std::size_t align_words = (context.device().base_address_align + 3) / 4;
+  std::size_t words = slots;
+  for (auto& p : s.passes)
+    if (p.list) {
+      p.list->counts_at = round_up(words, align_words);
+      words = p.list->counts_at + list_words;
+    }
+  s.host_counters.assign(std::max<std::size_t>(words, 1), 0);
   s.counters = Buffer(context, s.host_counters.size() * sizeof(std::uint32_t), "stream counters");
   s.next_counters = Buffer(context, s.host_counters.size() * sizeof(std::uint32_t), "stream counters");
+  for (auto& p : s.passes)
+    if (p.list) {
+      p.list->counts = s.counters.slice(p.list->counts_at * sizeof(std::uint32_t), list_count_bytes);
+      p.list->next_counts = s.next_counters.slice(p.list->counts_at * sizeof(std::uint32_t), list_count_bytes);
+    }
 }
 
 Scheduler::~Scheduler() = default;

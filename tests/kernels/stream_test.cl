@@ -153,12 +153,13 @@ __kernel void test_tree_seed(__global const uint* values, const uint n, const ui
                              __global uint2* list, __global uint* counts, const uint capacity)
 {
   const uint i = get_global_id(0);
+  cs_worklist_seed_begin(counts, n);
   if (i >= n) return;
   list[i] = (uint2)(i, 0);
   leaves[i] = 0;
   if (deepest) leaves[n + i] = 0;
   if (values[i] & 1u) {
-    const uint at = cs_worklist_seed_index(counts, capacity);
+    const uint at = cs_worklist_seed_index(counts, n, capacity);
     if (at < capacity) list[at] = (uint2)(i, 0);
   }
 }

@@ -56,8 +56,9 @@ template <class T> PassArg value_of(const T& v)
 // pass's own arguments first and then these:
 //   seed   over the inputs:    __global S* state, __global I* list, __global uint* counts,
 //          const uint capacity
-//          one first item per input (list[i]) and the input's state (state[i]); it may
-//          add more first items at cs_worklist_seed_index (runtime/worklist.h);
+//          calling cs_worklist_seed_begin first (runtime/worklist.h), then one first
+//          item per input (list[i]) and the input's state (state[i]); it may add more
+//          first items at cs_worklist_seed_index;
 //   round  `round_items` work-items, each group striding over the round's items
 //          (cl_kernels/runtime/worklist.h): __global S* state, __global const I* in,
 //          __global I* out, __global uint* counts, const uint round, const uint capacity,
