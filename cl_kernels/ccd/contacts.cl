@@ -161,13 +161,13 @@ CS_GROUP_KERNEL void cs_contact_sort_blocks(CS_FOUR_STREAMS(uint4), const uint d
 
 /* The sort's last merge pass (runtime/sort.cl's cs_merge_runs), writing Contacts. */
 CS_GROUP_KERNEL void cs_contacts_merged(__global const cs_record* in, const uint n, const uint width,
-                                        const uint block, const uint double_time, const uint object_bits,
+                                        const uint per_tile, const uint double_time, const uint object_bits,
                                         const uint vertex_bits, __global uint* contacts, __local uint* tile)
 {
   __local uint search[8];
-  cs_merge_share s = cs_merge_tile(in, n, width, block, tile, search);
+  cs_merge_share s = cs_merge_tile(in, n, width, per_tile, tile, search);
   for (; s.o < s.last; ++s.o) {
-    const cs_record r = cs_next_merged(&s, tile, block);
+    const cs_record r = cs_next_merged(&s, tile, per_tile);
     cs_store_contact(contacts, s.first + s.o, &r, double_time, object_bits, vertex_bits);
   }
 }

@@ -1,7 +1,8 @@
 /* Sort of records of CS_SORT_WORDS 32-bit words (sort.h): blocks of `block` records are
  * sorted first, each by one work-group in local memory; merge passes then merge
- * neighbouring sorted runs of `width` records into runs of 2 * width, a tile of `block`
- * records of the merged run per work-group. On equal records the left run's goes first. */
+ * neighbouring sorted runs of `width` records into runs of 2 * width, a tile of
+ * `per_tile` records of the merged run per work-group. On equal records the left run's
+ * goes first. */
 #include "sort.h"
 
 /* Each group sorts `block` records from first = group * block, in place. */
@@ -21,9 +22,9 @@ CS_GROUP_KERNEL void cs_sort_blocks(__global cs_record* records, const uint n, c
 }
 
 CS_GROUP_KERNEL void cs_merge_runs(__global const cs_record* in, __global cs_record* out, const uint n,
-                                   const uint width, const uint block, __local uint* tile)
+                                   const uint width, const uint per_tile, __local uint* tile)
 {
   __local uint search[8];
-  cs_merge_share s = cs_merge_tile(in, n, width, block, tile, search);
-  for (; s.o < s.last; ++s.o) out[s.first + s.o] = cs_next_merged(&s, tile, block);
+  cs_merge_share s = cs_merge_tile(in, n, width, per_tile, tile, search);
+  for (; s.o < s.last; ++s.o) out[s.first + s.o] = cs_next_merged(&s, tile, per_tile);
 }

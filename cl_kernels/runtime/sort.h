@@ -124,24 +124,24 @@ typedef struct {
   uint first, total, na, nb, i, j, o, last;
 } cs_merge_share;
 
-/* Group g of a merge pass writes records [g * block, (g + 1) * block) of the runs of
- * 2 * width that it merges from neighbouring runs of width in `in`: it finds where its
- * tile starts and ends along the merge path, reads the left and right records between
- * into local memory, and each work-item finds where its `chunk` outputs of the tile
- * start by a merge path search of its own there. A tile lies within one merged run:
- * width is a multiple of block. */
-inline cs_merge_share cs_merge_tile(__global const cs_record* in, const uint n, const uint width, const uint block,
+/* Group g of a merge pass writes records [g * per_tile, (g + 1) * per_tile) of the runs
+ * of 2 * width that it merges from neighbouring runs of width in `in`: it finds where
+ * its tile starts and ends along the merge path, reads the left and right records
+ * between into local memory, and each work-item finds where its `chunk` outputs of the
+ * tile start by a merge path search of its own there. A tile lies within one merged
+ * run: width is a multiple of per_tile. */
+inline cs_merge_share cs_merge_tile(__global const cs_record* in, const uint n, const uint width, const uint per_tile,
                                     __local uint* tile, __local uint* search)
 {
   cs_merge_share s;
   const uint lid = get_local_id(0);
-  s.first = get_group_id(0) * block;
+  s.first = get_group_id(0) * per_tile;
   const uint pair = 2 * width;
   const uint left = s.first - s.first % pair;
   const uint mid = left + min(width, n - left);
   const uint end = left + min(pair, n - left);
   const uint left_n = mid - left, right_n = end - mid;
-  const uint d0 = s.first - left, d1 = min(s.first + block, end) - left;
+  const uint d0 = s.first - left, d1 = min(s.first + per_tile, end) - left;
   cs_merge_path_splits(in + left, left_n, in + mid, right_n, d0, d1, search);
   const uint a0 = search[6], a1 = search[7], b0 = d0 - a0;
   s.na = a1 - a0;
@@ -149,17 +149,17 @@ inline cs_merge_share cs_merge_tile(__global const cs_record* in, const uint n, 
   s.nb = s.total - s.na;
   for (uint k = lid; k < s.total; k += CS_WG_SIZE) {
     const cs_record r = k < s.na ? in[left + a0 + k] : in[mid + b0 + k - s.na];
-    cs_store_local_record(tile, block, k, &r);
+    cs_store_local_record(tile, per_tile, k, &r);
   }
   barrier(CLK_LOCAL_MEM_FENCE);
 
-  const uint chunk = (block + CS_WG_SIZE - 1) / CS_WG_SIZE, e = lid * chunk;
+  const uint chunk = (per_tile + CS_WG_SIZE - 1) / CS_WG_SIZE, e = lid * chunk;
   s.o = e;
   s.last = e < s.total ? min(e + chunk, s.total) : e;
   uint lo = e > s.nb ? e - s.nb : 0, hi = min(e, s.na);
   while (lo < hi) {
     const uint m = lo + (hi - lo) / 2;
-    const cs_record a = cs_local_record(tile, block, m), b = cs_local_record(tile, block, s.na + e - m - 1);
+    const cs_record a = cs_local_record(tile, per_tile, m), b = cs_local_record(tile, per_tile, s.na + e - m - 1);
     if (cs_record_after(&a, &b))
       hi = m;
     else
@@ -172,11 +172,11 @@ inline cs_merge_share cs_merge_tile(__global const cs_record* in, const uint n, 
 
 /* The share's next output, which goes to place first + o of the merged runs (the caller
  * then steps o). */
-inline cs_record cs_next_merged(cs_merge_share* s, __local const uint* tile, const uint block)
+inline cs_record cs_next_merged(cs_merge_share* s, __local const uint* tile, const uint per_tile)
 {
   /* Past the end of a run, any record of the tile stands in: it is not taken. */
-  const cs_record a = cs_local_record(tile, block, min(s->i, s->total - 1)),
-                  b = cs_local_record(tile, block, min(s->na + s->j, s->total - 1));
+  const cs_record a = cs_local_record(tile, per_tile, min(s->i, s->total - 1)),
+                  b = cs_local_record(tile, per_tile, min(s->na + s->j, s->total - 1));
   const bool from_left = s->j >= s->nb || (s->i < s->na && !cs_record_after(&a, &b));
   if (from_left)
     ++s->i;

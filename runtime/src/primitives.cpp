@@ -154,6 +154,7 @@ Sorter::Sorter(Context& context, std::size_t words)
     : context_(context),
       words_(checked_record_words(words)),
       block_(block_records(context, words)),
+      tile_(std::min(block_, context.work_group_size())),
       blocks_(context.programs().kernel("runtime/sort.cl", "cs_sort_blocks", "-DCS_SORT_WORDS=" + std::to_string(words))),
       merge_(context.programs().kernel("runtime/sort.cl", "cs_merge_runs", "-DCS_SORT_WORDS=" + std::to_string(words)))
 {
@@ -206,12 +207,12 @@ const Buffer& Sorter::merge(const Buffer& records, const Buffer& scratch, std::s
 {
   check_sortable(scratch, n, label);
   const std::size_t wg = context_.work_group_size();
-  const std::size_t groups = (n + block_ - 1) / block_;
+  const std::size_t groups = (n + tile_ - 1) / tile_;
   const Buffer* in = &records;
   const Buffer* out = &scratch;
   for (std::size_t pass = 0; pass < passes; ++pass) {
-    merge_.set_args(*in, *out, cl_uint(n), cl_uint(block_ << pass), cl_uint(block_));
-    merge_.set_local(5, block_local_bytes());
+    merge_.set_args(*in, *out, cl_uint(n), cl_uint(block_ << pass), cl_uint(tile_));
+    merge_.set_local(5, tile_local_bytes());
     context_.launch(merge_, groups * wg, wg, timeline, label);
     std::swap(in, out);
   }
