@@ -221,6 +221,10 @@ struct Scheduler::State {
   std::vector<std::vector<unsigned char>> params;
   Timeline timeline;
   RunStats stats;
+  // Whether `stats` still waits for the last run's figures, collected on the first
+  // call for them (Scheduler::stats) rather than as the run ends: a caller's next
+  // launch then goes first.
+  bool stats_pending = false;
   StepArena arena;
   // Until memory runs short: from then on, what lives within a run is held pass by
   // pass (segments in the idle pool, streams in buffers of their own), so that any of
@@ -1406,6 +1410,7 @@ struct Scheduler::State {
   {
     timeline.clear();
     stats = RunStats{};
+    stats_pending = false;
     for (auto& p : passes) {
       p.stats = PassStats{p.spec->name};
       p.atomic_this_run = false;
@@ -1476,7 +1481,7 @@ struct Scheduler::State {
     }
     finish_run_reads();
     keep_needed_segments();
-    collect_stats();
+    stats_pending = true;
   }
 
   // What lived within the last run goes back: its segments (still held where a run
@@ -1751,8 +1756,16 @@ struct Scheduler::State {
     if (flag) throw RunStopped(pass.name);
   }
 
+  // Before a change to what the last run's figures describe (a stream's size or buffer,
+  // the idle scratch).
+  void settle_stats()
+  {
+    if (stats_pending) collect_stats();
+  }
+
   void collect_stats()
   {
+    stats_pending = false;
     std::map<std::string, std::uint64_t> by_label;
     stats.commands = timeline.resolve();
     for (const auto& e : stats.commands) by_label[e.label] += e.nanoseconds;
@@ -1868,7 +1881,11 @@ Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions optio
 Scheduler::~Scheduler() = default;
 
 void Scheduler::run() { state_->run(); }
-bool Scheduler::release_idle_scratch() { return state_->release_idle_scratch(); }
+bool Scheduler::release_idle_scratch()
+{
+  state_->settle_stats();
+  return state_->release_idle_scratch();
+}
 std::vector<Buffer> Scheduler::borrow_idle_scratch(const std::vector<std::size_t>& sizes) const
 {
   return state_->borrow_idle_scratch(sizes);
@@ -1877,6 +1894,7 @@ std::vector<Buffer> Scheduler::borrow_idle_scratch(const std::vector<std::size_t
 void Scheduler::upload(StreamId stream, const void* items, std::size_t count)
 {
   auto& s = *state_;
+  s.settle_stats();
   auto& st = s.state(stream);
   // What the stream held is replaced, so it goes first; short of memory, idle scratch
   // goes too.
@@ -1972,6 +1990,7 @@ void Scheduler::set_capacity(StreamId stream, std::size_t items)
 {
   auto& s = *state_;
   if (!s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is fixed-length; resize it instead");
+  s.settle_stats();
   auto& st = s.state(stream);
   const std::size_t kept = std::min(st.count, items);
   const Buffer old = st.buffer;  // held until its first items are copied over
@@ -1993,6 +2012,7 @@ void Scheduler::resize(StreamId stream, std::size_t items)
 {
   auto& s = *state_;
   if (s.spec(stream).variable) throw Error("stream " + s.spec(stream).name + " is variable-length; its passes size it");
+  s.settle_stats();
   if (items != s.state(stream).capacity) s.allocate(stream, items);
   s.state(stream).count = items;
 }
@@ -2003,6 +2023,7 @@ void Scheduler::swap(StreamId a, StreamId b)
   const auto &sa = s.spec(a), &sb = s.spec(b);
   if (sa.element_bytes != sb.element_bytes || sa.variable != sb.variable)
     throw Error("streams " + sa.name + " and " + sb.name + " differ in element size or kind and cannot swap");
+  s.settle_stats();
   auto &x = s.state(a), &y = s.state(b);
   std::swap(x.buffer, y.buffer);
   std::swap(x.count, y.count);
@@ -2034,7 +2055,11 @@ std::vector<std::string> Scheduler::execution_order() const
   return names;
 }
 
-const RunStats& Scheduler::stats() const { return state_->stats; }
+const RunStats& Scheduler::stats() const
+{
+  state_->settle_stats();
+  return state_->stats;
+}
 Registration Scheduler::registration() const { return state_->options.registration; }
 
 }  // namespace cstreams::runtime

@@ -225,6 +225,39 @@ TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][sche
   CHECK(s.download<Pair>(pairs) == std::vector<Pair>(all.begin(), all.begin() + std::ptrdiff_t(half)));
 }
 
+// The figures are gathered once asked for, so that a caller's next launch need not wait
+// for them: they still describe the streams as the run left them.
+TEST_CASE("a run's figures describe its streams as it ended, whatever changed them before they were asked for",
+          "[runtime][scheduler][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  StreamGraph g;
+  auto values = g.fixed("values", 4, 0);
+  auto pairs = g.variable("pairs", 8, 1);
+  auto spare = g.variable("spare", 8, 1);
+  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
+  Scheduler s(ctx, g);
+  const auto expected = cstreams::test::reference(random_values(3000, 5)).pairs;
+  for (const bool swapped : {false, true}) {
+    INFO((swapped ? "pairs swapped after the run" : "nothing changed after the run"));
+    s.upload(values, random_values(3000, 5));
+    s.run();
+    const std::size_t bytes = s.buffer(pairs).bytes();
+    if (swapped) s.swap(pairs, spare);
+    CHECK(s.count(swapped ? spare : pairs) == expected.size());
+    const RunStats& stats = s.stats();
+    REQUIRE(stats.streams.size() == 3);
+    CHECK(stats.streams[1].name == "pairs");
+    CHECK(stats.streams[1].count == expected.size());
+    CHECK(stats.streams[1].items == expected.size());
+    CHECK(stats.streams[1].bytes == bytes);
+    CHECK(stats.streams[2].count == 0);
+    REQUIRE(stats.passes.size() == 1);
+    CHECK(stats.passes[0].name == "expand");
+    if (swapped) s.swap(pairs, spare);
+  }
+}
+
 TEST_CASE("a pass that emits in any order registers through the global counter, losing no item and launching less",
           "[runtime][scheduler][quick]")
 {

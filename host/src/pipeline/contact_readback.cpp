@@ -60,13 +60,17 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
 }
 
 ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile,
-                                  runtime::PassStats& stats, std::vector<runtime::Timeline::Entry>& commands)
+                                  runtime::PassStats& stats, std::vector<runtime::Timeline::Entry>& commands,
+                                  const std::function<void()>& meanwhile)
 {
   stats = runtime::PassStats{};
   stats.name = "canonical contacts";
   std::size_t n = 0;
   for (const auto& found : streams.contacts) n += scheduler.count(found.first);
-  if (n == 0) return {};
+  if (n == 0) {
+    meanwhile();
+    return {};
+  }
   const std::size_t record_bytes = n * record_.words * sizeof(cl_uint), sort_bytes = sorter_.scratch_bytes_for(n),
                     contact_bytes = n * sizeof(Contact);
   // Lent by the step arena's free space between runs. Where it has none to lend, the
@@ -110,12 +114,13 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   context_.launch(sort_blocks_, groups * wg, wg, events, stats.name);
   if (const std::size_t passes = sorter_.merge_passes(n)) {
     const runtime::Buffer& runs = sorter_.merge(records, sort_scratch, n, passes - 1, events, stats.name.c_str());
-    merge_last_.set_args(runs, cl_uint(n), cl_uint(sorter_.block() << (passes - 1)), cl_uint(sorter_.block()),
+    merge_last_.set_args(runs, cl_uint(n), cl_uint(sorter_.block() << (passes - 1)), cl_uint(sorter_.tile()),
                          cl_uint(double_time_), record_.object_bits, record_.vertex_bits, contacts);
-    merge_last_.set_local(8, sorter_.block_local_bytes());
-    context_.launch(merge_last_, groups * wg, wg, events, stats.name);
+    merge_last_.set_local(8, sorter_.tile_local_bytes());
+    context_.launch(merge_last_, (n + sorter_.tile() - 1) / sorter_.tile() * wg, wg, events, stats.name);
   }
   stats.launches = unsigned(context_.kernel_launches() - launches);
+  meanwhile();
   runtime::ensure_capacity(context_, staging_, contact_bytes, "contacts");
   context_.read(contacts, staging_.data(), contact_bytes, 0, events);
   for (auto& e : timeline.resolve()) {

@@ -12,6 +12,7 @@
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -33,12 +34,15 @@ public:
   // The contacts of the scheduler's last run, in canonical order, where the read put
   // them: valid until the next read. `stats` receives the device time (with `profile`)
   // and the launches it took, and `commands` gains its commands, the read included.
+  // `meanwhile` runs once the sort is queued and before the read waits for it: host
+  // work that then takes none of the step's time (it must queue nothing that the
+  // device would do before the sort, nor touch the contact streams).
   // Its device scratch (records, the sort's, the Contacts) is lent by the scheduler's
   // step arena between runs; without one that holds it, the read takes scratch of its
   // own and gives it back, and short of device memory for it has the scheduler give
   // back its idle scratch.
   ContactSpan read(runtime::Scheduler& scheduler, const CcdStreams& streams, bool profile, runtime::PassStats& stats,
-                   std::vector<runtime::Timeline::Entry>& commands);
+                   std::vector<runtime::Timeline::Entry>& commands, const std::function<void()>& meanwhile);
 
 private:
   runtime::Context& context_;

@@ -104,7 +104,10 @@ struct Detector::State {
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});
     start_exact = end_exact = upload_scene(*scheduler, g, layout, scene, options.solver.min_separation);
-    scheduler->on_counter_read([this] { queue_uploads_ahead(false); });
+    scheduler->on_counter_read([this] {
+      start_uploads_ahead();
+      queue_uploads_ahead(false);
+    });
     if (!has(streams.front)) return;
     front.install(*scheduler, streams, seeds);
   }
@@ -255,14 +258,16 @@ struct Detector::State {
     return floats;
   }
 
-  // As a step starts: a task rounds the positions given ahead into the pinned copies
-  // while the step runs, so that the host's copying (27 MB of 1.5M triangles in double)
-  // is off the step's path. It makes no OpenCL call: one from a second thread waited
-  // for the step's blocking reads and slowed the launches after them (an H200's
-  // cloth-ball step, 0.12 ms).
+  // At the step's first counter read, or as it ends where none came: a task rounds the
+  // positions given ahead into the pinned copies while the step runs, so that the
+  // host's copying (27 MB of 1.5M triangles in double) is off the step's path. Not
+  // before the step's first launch, which its thread's start held back (an H200's
+  // cloth-ball step: 12-20 us), while at the read the device is busy. It makes no
+  // OpenCL call: one from a second thread waited for the step's blocking reads and
+  // slowed the launches after them (cloth-ball, 0.12 ms).
   void start_uploads_ahead()
   {
-    if (!ahead.ends.any()) return;
+    if (!ahead.ends.any() || ahead.uploading.valid() || ahead.rounded) return;
     // The copies are written again once the last step's uploads (long done) are.
     context.block_until(ahead.taken);
     ahead.taken.clear();
@@ -323,6 +328,7 @@ struct Detector::State {
   void end_step()
   {
     runtime::Scheduler& q = *scheduler;
+    start_uploads_ahead();  // where no counter read did
     if (!ahead.uploading.valid() && !ahead.rounded) {
       q.copy(streams.x1, 0, streams.x0, 0, layout.moving_vertices);
       if (has(streams.x1_double)) q.copy(streams.x1_double, 0, streams.x0_double, 0, layout.moving_vertices);
@@ -447,7 +453,6 @@ void Detector::run_step(Report report)
   const std::uint64_t launches = s.context.kernel_launches(), reads = s.context.blocking_reads();
   s.context.reset_memory_high_water();
   s.given.queue(*s.scheduler);
-  s.start_uploads_ahead();
   const CcdStreams& st = s.streams;
   s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
   const auto all = [](const std::vector<bool>& v) { return std::find(v.begin(), v.end(), false) == v.end(); };
@@ -460,18 +465,27 @@ void Detector::run_step(Report report)
   s.stats.front_retries = s.front.run(*s.scheduler, st);
   s.have_earliest = report == Report::earliest_toi;
   runtime::Scheduler& q = *s.scheduler;
-  if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);
-
   DetectorStats& stats = s.stats;
-  stats.run = q.stats();
+  // What the host does once the run is over (its figures, the front and the positions
+  // handed on to the next step): while the device sorts the contacts, where it does
+  // (cloth-ball on an H200: 20-40 us that the sort's launch waited for, or the step's
+  // end after the read).
+  const auto after_run = [&] {
+    stats.run = q.stats();
+    if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);
+    s.end_step();
+  };
   if (report == Report::contacts) {
     runtime::PassStats readback;
-    s.contacts = s.readback.read(q, st, s.options.profile, readback, stats.run.commands);
+    std::vector<runtime::Timeline::Entry> commands;
+    s.contacts = s.readback.read(q, st, s.options.profile, readback, commands, after_run);
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
+    stats.run.commands.insert(stats.run.commands.end(), commands.begin(), commands.end());
+  } else {
+    after_run();
   }
   stats.device_span_ns = stats.run.span().nanoseconds();
-  s.end_step();
   stats.front_pairs = s.options.front == FrontMode::none ? 0 : s.count(st.front);
   stats.front_level_cap = s.front.level_cap();
   // Over every slice of a step that ran in slices (a stream's count is the last one's).

@@ -166,6 +166,9 @@ public:
   const StreamGraph& graph() const;
   // Pass names in execution order.
   std::vector<std::string> execution_order() const;
+  // The last run's figures, as its streams stood when it ended. They are gathered on
+  // the first call for them or before the first change to the streams after the run,
+  // so that the host's next launch need not wait for them.
   const RunStats& stats() const;
   Registration registration() const;
 
