@@ -768,11 +768,10 @@ struct Scheduler::State {
   // asked for with its input kept; a seed that overflows starts again.
   // The pass emits from the state as it stands after a batch, and the stage's counter
   // read brings the counts with it (flush, settle_list), which saves a round trip where
-  // the batch was the last; where
-  // it was not, the rounds go on from there and the pass emits again. On a device that
-  // ends loops early, each round goes over exactly its items, one a work-item, so that
-  // no work-item strides over many: the host waits for the counts after every round
-  // (such devices are CPUs, where a read costs little).
+  // the batch was the last; where it was not, the rounds go on from there and the pass
+  // emits again. On a device that ends loops early, each round goes over exactly its
+  // items, one a work-item, so that no work-item strides over many: the host waits for
+  // the counts after every round (such devices are CPUs, where a read costs little).
   void refine(PassState& p, std::size_t n)
   {
     const Worklist& w = *p.spec->worklist;
