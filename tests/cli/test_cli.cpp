@@ -307,26 +307,37 @@ TEST_CASE("run --memory-budget keeps the step under the budget with the same con
     CHECK(text(csv) == text(dir / "free.csv"));
   }
 
-  // Below that, passes run in slices where they must: each budget runs with the same
-  // contacts or fails naming the allocation, and some run in slices.
+  // Below that, passes run in slices where they must. Whether the funnel's step has room
+  // for slices between the least it runs whole in and the least it runs at all depends
+  // on the device (none on the H200: the next front it gathers is most of that least),
+  // so slices are asked of the generated bodies, whose steps slice on every device
+  // (test_detector.cpp): each budget runs with the same contacts or fails naming the
+  // allocation, and some steps run in slices.
+  const fs::path bodies = dir / "bodies";
+  execute({"generate", "n-body", "--out", bodies.string(), "--seed", "1", "--frames", "24", "--resolution", "40"});
+  const std::string scene = (bodies / "scene.json").string();
+  execute({"run", scene, "--json", (dir / "bodies.json").string(), "--out", (dir / "bodies.csv").string()});
+  const std::size_t bodies_peak = nlohmann::json::parse(std::ifstream(dir / "bodies.json"))["peak_bytes"];
   unsigned sliced = 0;
-  for (double share : {0.98, 0.96, 0.94, 0.92, 0.9, 0.85, 0.8}) {
-    const double budget_mb = share * double(floor) / (1 << 20);
+  for (double share : {0.8, 0.75, 0.7, 0.6, 0.5}) {
+    const double budget_mb = share * double(bodies_peak) / (1 << 20);
     const fs::path json = dir / "sliced.json", csv = dir / "sliced.csv";
-    INFO("budget " << budget_mb << " MiB, peak " << peak << " bytes, global counter's peak " << floor);
+    INFO("budget " << budget_mb << " MiB, the bodies' unbudgeted peak " << bodies_peak << " bytes");
     try {
-      execute({"run", a, b, "--memory-budget", std::to_string(budget_mb), "--json", json.string(), "--out", csv.string()});
+      execute({"run", scene, "--memory-budget", std::to_string(budget_mb), "--json", json.string(), "--out", csv.string()});
     } catch (const std::exception& e) {
+      CHECK(share < 0.8);
       CHECK_THAT(e.what(), Catch::Contains("allocating"));
       continue;
     }
     const auto j = nlohmann::json::parse(std::ifstream(json));
-    if (j["steps"][0]["slices"].get<unsigned>() > 1) {
-      ++sliced;
-      CHECK_FALSE(j["steps"][0]["sliced_pass"].get<std::string>().empty());
-    }
+    for (const auto& step : j["steps"])
+      if (step["slices"].get<unsigned>() > 1) {
+        ++sliced;
+        CHECK_FALSE(step["sliced_pass"].get<std::string>().empty());
+      }
     CHECK(j["peak_bytes"].get<double>() <= budget_mb * (1 << 20));
-    CHECK(text(csv) == text(dir / "free.csv"));
+    CHECK(text(csv) == text(dir / "bodies.csv"));
   }
   CHECK(sliced > 0);
 
