@@ -163,6 +163,13 @@ Sorter::Sorter(Context& context, std::size_t words)
 // Runs that fit one block sort in local memory and merge nothing.
 std::size_t Sorter::scratch_bytes_for(std::size_t n) const { return n >= 2 && block_ < n ? n * words_ * sizeof(cl_uint) : 0; }
 
+std::size_t Sorter::sorted_block(std::size_t n) const
+{
+  std::size_t block = 2;
+  while (block < std::min(n, block_)) block *= 2;
+  return block;
+}
+
 void Sorter::reserve(std::size_t n)
 {
   if (const std::size_t bytes = scratch_bytes_for(n)) ensure_capacity(context_, scratch_, bytes, "sort scratch");
@@ -180,7 +187,7 @@ const Buffer& Sorter::sort(const Buffer& records, const Buffer& scratch, std::si
   check_sortable(scratch, n, label);
   if (n < 2) return records;
   const std::size_t wg = context_.work_group_size();
-  blocks_.set_args(records, cl_uint(n), cl_uint(block_));
+  blocks_.set_args(records, cl_uint(n), cl_uint(sorted_block(n)));
   blocks_.set_local(3, block_local_bytes());
   context_.launch(blocks_, (n + block_ - 1) / block_ * wg, wg, timeline, label);
   return merge(records, scratch, n, merge_passes(n), timeline, label);

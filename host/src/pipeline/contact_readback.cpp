@@ -106,7 +106,7 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
   sort_blocks_.set_arg(a++, scheduler.buffer(streams.vertex_object));
   sort_blocks_.set_arg(a++, first_vertex_);
   sort_blocks_.set_arg(a++, cl_uint(n));
-  sort_blocks_.set_arg(a++, cl_uint(sorter_.block()));
+  sort_blocks_.set_arg(a++, cl_uint(sorter_.sorted_block(n)));
   sort_blocks_.set_arg(a++, records);
   sort_blocks_.set_arg(a++, contacts);
   sort_blocks_.set_local(a, sorter_.block_local_bytes());

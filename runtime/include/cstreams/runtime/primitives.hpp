@@ -100,6 +100,10 @@ public:
   // memory it sorts them in, the records of a merge pass's tile and its local memory,
   // and the merge passes that n records take after the blocks.
   std::size_t block() const { return block_; }
+  // The records each group of the first launch sorts, where n records go into groups
+  // of block() records: block() itself, but a least power of two for n that one block
+  // holds, which saves the network's longest stages (the funnel's 368 contacts).
+  std::size_t sorted_block(std::size_t n) const;
   std::size_t block_local_bytes() const { return block_ * words_ * sizeof(cl_uint); }
   std::size_t tile() const { return tile_; }
   std::size_t tile_local_bytes() const { return tile_ * words_ * sizeof(cl_uint); }
