@@ -105,6 +105,16 @@ __kernel void test_plus_one(__global uint* values, const uint n)
   if (i < n) values[i] += 1u;
 }
 
+/* Seven buffers added into an eighth: a launch that binds as many buffers as the
+ * pipeline's busier kernels, for bench_runtime's host costs. */
+__kernel void test_sum_into_first(__global uint* a, __global const uint* b, __global const uint* c,
+                                  __global const uint* d, __global const uint* e, __global const uint* f,
+                                  __global const uint* g, __global const uint* h, const uint n)
+{
+  const uint i = get_global_id(0);
+  if (i < n) a[i] += b[i] + c[i] + d[i] + e[i] + f[i] + g[i] + h[i];
+}
+
 __kernel void test_times_two(__global uint* values, const uint n)
 {
   const uint i = get_global_id(0);

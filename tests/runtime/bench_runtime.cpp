@@ -1,5 +1,6 @@
 // Benchmark of the runtime's primitives against Boost.Compute and a single global
-// atomic counter, and of the sort. Prints a Markdown table (the one in BENCHMARKS.md):
+// atomic counter, and of the sort, after what the host pays for a launch and a read.
+// Prints Markdown tables (those in BENCHMARKS.md):
 //   build/bin/bench_runtime [--sizes 1000000,4000000] [--repeat 15]
 // Times are wall-clock medians after one warm-up, each repeat ending in clFinish (or
 // the scheduler's own blocking counter read), so launches and host round trips count.
@@ -49,6 +50,79 @@ void require(bool ok, const std::string& what)
   if (!ok) throw Error("benchmark self-check failed: " + what);
 }
 
+double microseconds_since(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count();
+}
+
+// What a step of few items costs beyond its kernels: the host's time to queue a launch
+// (binding one buffer, or eight like the pipeline's busier kernels), a launch of one
+// group followed by a blocking 4-byte read (a stage's counter read with the device
+// idle), and a read of 4 MiB (the contacts'). Medians of 400 after as many warm-ups.
+void host_costs(Context& ctx)
+{
+  // The file's emitting kernels need a registration to build with.
+  const char* options = "-DCS_REGISTRATION=2";
+  const Kernel one = ctx.programs().kernel("kernels/stream_test.cl", "test_plus_one", options);
+  const Kernel eight = ctx.programs().kernel("kernels/stream_test.cl", "test_sum_into_first", options);
+  const std::size_t wg = ctx.work_group_size(), items = wg, bytes = std::size_t(4) << 20;
+  std::vector<Buffer> buffers;
+  for (int b = 0; b < 8; ++b) {
+    buffers.emplace_back(ctx, items * 4, "bench buffer");
+    ctx.fill_u32(buffers.back(), 0, 0, items);
+  }
+  Buffer large(ctx, bytes, "bench read");
+  ctx.fill_u32(large, 1, 0, bytes / 4);
+  std::vector<cl_uint> host(bytes / 4);
+  const auto bind_one = [&] { one.set_args(buffers[0], cl_uint(items)); };
+  const auto bind_eight = [&] {
+    eight.set_args(buffers[0], buffers[1], buffers[2], buffers[3], buffers[4], buffers[5], buffers[6], buffers[7],
+                   cl_uint(items));
+  };
+  const auto median_us = [](const std::function<double()>& sample) {
+    for (int r = 0; r < 400; ++r) sample();
+    std::vector<double> us;
+    for (int r = 0; r < 400; ++r) us.push_back(sample());
+    std::nth_element(us.begin(), us.begin() + us.size() / 2, us.end());
+    return us[us.size() / 2];
+  };
+  // Twenty launches in a row, as a stage queues them; the finish is not timed.
+  const auto queued = [&](const Kernel& k, const std::function<void()>& bind) {
+    return median_us([&] {
+      ctx.finish();
+      const auto start = std::chrono::steady_clock::now();
+      for (int l = 0; l < 20; ++l) {
+        bind();
+        ctx.launch(k, items, wg);
+      }
+      return microseconds_since(start) / 20;
+    });
+  };
+  const double launch_one = queued(one, bind_one), launch_eight = queued(eight, bind_eight);
+  const double round_trip = median_us([&] {
+    ctx.finish();
+    const auto start = std::chrono::steady_clock::now();
+    bind_one();
+    ctx.launch(one, items, wg);
+    ctx.read(buffers[0], host.data(), 4);
+    return microseconds_since(start);
+  });
+  const double large_read = median_us([&] {
+    ctx.finish();
+    const auto start = std::chrono::steady_clock::now();
+    ctx.read(large, host.data(), bytes);
+    return microseconds_since(start);
+  });
+  require(host[0] == 1 && host.back() == 1, "the 4 MiB read returned other values than were written");
+  std::printf("| host cost                               | median us |\n");
+  std::printf("|-----------------------------------------|----------:|\n");
+  std::printf("| queue a launch binding 1 buffer         | %9.2f |\n", launch_one);
+  std::printf("| queue a launch binding 8 buffers        | %9.2f |\n", launch_eight);
+  std::printf("| launch 1 group, then a 4-byte read      | %9.2f |\n", round_trip);
+  std::printf("| read 4 MiB (%5.1f GB/s)                 | %9.2f |\n\n", double(bytes) / large_read * 1e-3,
+              large_read);
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -64,6 +138,7 @@ try {
   const auto& d = ctx.device();
   std::printf("Device: %s (%s, driver %s, %u compute units, work-group %zu)\n\n", d.name.c_str(),
               d.platform_name.c_str(), d.driver_version.c_str(), d.compute_units, ctx.work_group_size());
+  host_costs(ctx);
   std::printf("| operation    | implementation         |      items |    output | median ms |  Mitems/s |\n");
   std::printf("|--------------|------------------------|-----------:|----------:|----------:|----------:|\n");
 
