@@ -16,9 +16,9 @@
  * cs_worklist_seed_begin, which counts its n first items in counts[0] and sets
  * counts[9], so the host writes nothing before a seed. counts[r % 3] holds the items of
  * round r: a seed's extra first items add to counts[0] too, and go after the n first
- * ones, where counts[12] places them. Round r appends to counts[(r + 1) % 3] and clears counts[(r + 2) % 3],
- * which round r - 1 read and round r + 1 appends to, so no launch is needed between
- * rounds. An append past the capacity writes nothing and raises counts[3] to the
+ * ones, where counts[12] places them. Round r appends to counts[(r + 1) % 3] and clears
+ * counts[(r + 2) % 3], which round r - 1 read and round r + 1 appends to, so no launch
+ * is needed between rounds. An append past the capacity writes nothing and raises counts[3] to the
  * capacity it needed. The round after one that overflowed finds more items than the
  * lists hold: it and every round after it do nothing (counts[10] marks it), so the
  * overflowing round's input stays whole. The host grows the lists, keeping that input,

@@ -214,7 +214,7 @@ const Buffer& Sorter::merge(const Buffer& records, const Buffer& scratch, std::s
 {
   check_sortable(scratch, n, label);
   const std::size_t wg = context_.work_group_size();
-  const std::size_t groups = (n + tile_ - 1) / tile_;
+  const std::size_t groups = tiles(n);
   const Buffer* in = &records;
   const Buffer* out = &scratch;
   for (std::size_t pass = 0; pass < passes; ++pass) {

@@ -1196,7 +1196,7 @@ struct Scheduler::State {
   }
 
   // Every counter of the run zero, the work lists' counts among them.
-  void clear_counters()
+  void clear_all_counters()
   {
     context.fill_u32(counters, 0, 0, host_counters.size(), tl());
     lists_cleared();
@@ -1439,7 +1439,7 @@ struct Scheduler::State {
         if (p.list) std::swap(p.list->counts, p.list->next_counts);
       lists_cleared();
     } else {
-      clear_counters();
+      clear_all_counters();
     }
     next_counters_clear = false;
 
@@ -1720,7 +1720,7 @@ struct Scheduler::State {
           whole.once.emplace_back(&state(s), state(s).count);
           state(s).count = 0;
         }
-      clear_counters();
+      clear_all_counters();
       for (std::size_t j = first; j < passes.size(); ++j) {
         if (k > 0 && !every_slice[j]) continue;
         if (passes[j].list) passes[j].list->restart();

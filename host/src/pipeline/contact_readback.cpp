@@ -117,7 +117,7 @@ ContactSpan ContactReadback::read(runtime::Scheduler& scheduler, const CcdStream
     merge_last_.set_args(runs, cl_uint(n), cl_uint(sorter_.block() << (passes - 1)), cl_uint(sorter_.tile()),
                          cl_uint(double_time_), record_.object_bits, record_.vertex_bits, contacts);
     merge_last_.set_local(8, sorter_.tile_local_bytes());
-    context_.launch(merge_last_, (n + sorter_.tile() - 1) / sorter_.tile() * wg, wg, events, stats.name);
+    context_.launch(merge_last_, sorter_.tiles(n) * wg, wg, events, stats.name);
   }
   stats.launches = unsigned(context_.kernel_launches() - launches);
   meanwhile();

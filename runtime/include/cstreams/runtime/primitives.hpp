@@ -107,6 +107,8 @@ public:
   std::size_t sorted_block(std::size_t n) const;
   std::size_t block_local_bytes() const { return block_ * words_ * sizeof(cl_uint); }
   std::size_t tile() const { return tile_; }
+  // The work-groups of a merge pass over n records: one a tile.
+  std::size_t tiles(std::size_t n) const { return (n + tile_ - 1) / tile_; }
   std::size_t tile_local_bytes() const { return tile_ * words_ * sizeof(cl_uint); }
   std::size_t merge_passes(std::size_t n) const;
   // Throws unless n records can be sorted with `scratch` (sort() and merge() check too).
