@@ -27,6 +27,12 @@ using namespace cstreams::runtime;
 
 namespace {
 
+double median(std::vector<double> values)
+{
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
 double median_ms(int repeat, const std::function<void()>& op)
 {
   op();
@@ -36,8 +42,7 @@ double median_ms(int repeat, const std::function<void()>& op)
     op();
     ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   }
-  std::nth_element(ms.begin(), ms.begin() + ms.size() / 2, ms.end());
-  return ms[ms.size() / 2];
+  return median(std::move(ms));
 }
 
 void row(const char* op, const char* impl, std::size_t items, std::size_t outputs, double ms)
@@ -86,8 +91,7 @@ void host_costs(Context& ctx)
     for (int r = 0; r < 400; ++r) sample();
     std::vector<double> us;
     for (int r = 0; r < 400; ++r) us.push_back(sample());
-    std::nth_element(us.begin(), us.begin() + us.size() / 2, us.end());
-    return us[us.size() / 2];
+    return median(std::move(us));
   };
   // Twenty launches in a row, as a stage queues them; the finish is not timed.
   const auto queued = [&](const Kernel& k, const std::function<void()>& bind) {
@@ -222,10 +226,6 @@ try {
       std::memcpy(expected.data(), records.data(), records.size() * 4);
       std::sort(expected.begin(), expected.end());
       require(std::memcmp(expected.data(), back.data(), back.size() * 4) == 0, "sorted records differ from the host's sort");
-      auto median = [](std::vector<double> v) {
-        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-        return v[v.size() / 2];
-      };
       row("sort 8 words", "cstreams (wall)", n, n, ms);
       row("sort 8 words", "block sort (device)", n, n, median(blocks_ms));
       row("sort 8 words", "merge passes (device)", n, n, median(merges_ms));
