@@ -89,28 +89,49 @@ inline uint cs_level(__global const int2* nodes, const int2 p)
   return (uint)(cs_node_depth(nodes[p.x]) + cs_node_depth(nodes[p.y]));
 }
 
+/* A search's pairs waiting for a work-item of the group (cs_front_update): as many as
+ * eight rounds of the group's work-items can push, 16 KiB in groups of 256. */
+#define CS_SHARED_SEARCH (8 * CS_WG_SIZE)
+
+/* A pair waiting in a search, with whether its boxes are known to overlap (the pair a
+ * search starts from was tested before it waits). */
+inline int2 cs_waiting(const int2 p, const int overlap_known) { return overlap_known ? (int2)(-1 - p.x, p.y) : p; }
+
 /* One work-item per pair of the current front (a cut of the BVTT: every pair of
  * leaves lies under exactly one of its pairs). With CS_KEEP_FRONT, emits the next front:
  *  - a pair deeper than `cap` stands for its ancestor at level <= cap;
  *  - a pair whose boxes are apart climbs to its highest ancestor whose boxes are apart;
  *    of all the front pairs under that ancestor, the one on its chain of first
  *    children emits it (exactly one is, since the front is a cut);
- *  - a pair whose boxes overlap is searched depth first: the search emits the pairs
- *    where it stops (boxes apart, or two leaves) and the overlapping pairs at the cap,
- *    below which it goes on without emitting.
+ *  - a pair whose boxes overlap is searched: the search emits the pairs where it stops
+ *    (boxes apart, or two leaves) and the overlapping pairs at the cap, below which it
+ *    goes on without emitting.
  * So the next front is again a cut, no deeper than `cap` (0xffffffff: the exact
  * front). Every search emits the pairs of overlapping leaves whose faces share no vertex.
  *
- * On a device that ends loops early, a search that would need more than
- * CS_SEARCH_TRIPS trips, or whose loops the canary finds cut short, stops and raises
- * cut[0] (cut[1] holds 1): its outputs are incomplete, and the host runs the step
- * again from a finer front. */
+ * The work-group searches together: the pairs to search wait in local memory, and each
+ * round every work-item takes one of the newest (so the group goes deep first and the
+ * list stays short), tests it and adds its children. Searched one a work-item, a pair
+ * that opened onto a large subtree kept one work-item busy while its group and the
+ * device waited: cloth-ball's first step took 34 ms in the front update on the H200,
+ * the 1.5M-triangle sheet's surge step 1.7 s. Children that find the list full are
+ * searched depth first by the work-item that found them, on its own stack.
+ *
+ * On a device that ends loops early, a work-item that would need more than
+ * CS_SEARCH_TRIPS trips, or whose loops the canary finds cut short, stops the group's
+ * search and raises cut[0] (cut[1] holds 1): its outputs are incomplete, and the host
+ * runs the step again from a finer front. */
 __kernel void cs_front_update(__global const int2* front, const uint n, __global const int2* nodes,
                               __global const float* node_boxes, __global const uint* faces, const uint cap,
                               __global uint* cut, CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
 {
   CS_FRONT_BEGIN;
   CS_EMITTER_BEGIN(pairs);
+  __local int2 waiting[CS_SHARED_SEARCH];
+  __local uint waiting_count;
+  const uint lid = (uint)get_local_id(0);
+  if (lid == 0) waiting_count = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
   const uint s = get_global_id(0);
   if (s < n) {
     int2 p = front[s];
@@ -152,59 +173,84 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
       }
     } else if (live && p.x != p.y && nodes[p.x].x < 0 && nodes[p.y].x < 0) {
       /* Two overlapping leaves, as most of a settled front's other pairs are: settled
-       * here rather than through the search's stack. */
+       * here rather than through the search. */
       const uint fa = (uint)cs_node_face(nodes[p.x]), fb = (uint)cs_node_face(nodes[p.y]);
       if (!cs_faces_adjacent(faces, fa, fb)) CS_EMIT(pairs, (uint2)(fa, fb));
       CS_FRONT_EMIT(p);
     } else if (live) {
       /* The pair the search starts from overlaps, as tested above; testing its boxes
        * again cost the front update a tenth (H100: cloth-ball 0.40 -> 0.36 ms, n-body
-       * 0.56 -> 0.48). */
-      int2 stack[CS_BVTT_STACK];
-      int top = 0, first = 1;
-      stack[top++] = p;
+       * 0.56 -> 0.48). One a work-item: the list holds them all. */
+      waiting[atomic_inc(&waiting_count)] = cs_waiting(p, p.x != p.y);
+    }
+  }
 #if CS_LOOP_TRIPS
-      uint trips = 0;
+  /* Every work-item counts the group's rounds alike, so that all of them leave the
+   * rounds together, and its own visits on top. */
+  __local int stopped;
+  if (lid == 0) stopped = 0;
+  uint rounds = 0, trips = 0;
 #endif
-      while (top > 0) {
+  for (;;) {
+    barrier(CLK_LOCAL_MEM_FENCE);
+    /* Every work-item reads the same count: it changes only between the barriers below. */
+    const uint count = min(waiting_count, (uint)CS_SHARED_SEARCH);
+    if (count == 0) break;
 #if CS_LOOP_TRIPS
-        if (++trips > CS_SEARCH_TRIPS) {
-          cut[0] = 1u;
-          break;
-        }
+    if (stopped) break;
+    if (++rounds > CS_SEARCH_TRIPS) {
+      if (lid == 0) cut[0] = 1u;
+      break;
+    }
 #endif
-        const int2 q = stack[--top];
-        const int overlap_known = first;
-        first = 0;
-        const int2 a = nodes[q.x], b = nodes[q.y];
-        const uint level = (uint)(cs_node_depth(a) + cs_node_depth(b));
-        const int in_front = CS_KEEP_FRONT && level <= cap;
-        if (q.x == q.y) {
-          if (a.x < 0) continue;
-          if (in_front && cap - level < 2) CS_FRONT_EMIT(q);
-          stack[top++] = (int2)(a.x, a.x);
-          stack[top++] = (int2)(a.x + 1, a.x + 1);
-          stack[top++] = (int2)(a.x, a.x + 1);
-          continue;
-        }
-        if (!overlap_known && !cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
-          if (in_front) CS_FRONT_EMIT(q);
-          continue;
-        }
-        if (a.x < 0 && b.x < 0) {
-          const uint fa = (uint)cs_node_face(a), fb = (uint)cs_node_face(b);
-          if (!cs_faces_adjacent(faces, fa, fb)) CS_EMIT(pairs, (uint2)(fa, fb));
-          if (in_front) CS_FRONT_EMIT(q);
-          continue;
-        }
+    const uint take = min(count, (uint)get_local_size(0));
+    int2 stack[CS_BVTT_STACK];
+    int top = 0;
+    if (lid < take) stack[top++] = waiting[count - take + lid];
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) waiting_count = count - take;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    while (top > 0) {
+#if CS_LOOP_TRIPS
+      if (rounds + ++trips > CS_SEARCH_TRIPS) {
+        cut[0] = 1u;
+        stopped = 1;
+        break;
+      }
+#endif
+      const int2 w = stack[--top];
+      const int overlap_known = w.x < 0;
+      const int2 q = overlap_known ? (int2)(-1 - w.x, w.y) : w;
+      const int2 a = nodes[q.x], b = nodes[q.y];
+      const uint level = (uint)(cs_node_depth(a) + cs_node_depth(b));
+      const int in_front = CS_KEEP_FRONT && level <= cap;
+      int2 children[3];
+      int k = 0;
+      if (q.x == q.y) {
+        if (a.x < 0) continue;
+        if (in_front && cap - level < 2) CS_FRONT_EMIT(q);
+        children[0] = (int2)(a.x, a.x);
+        children[1] = (int2)(a.x + 1, a.x + 1);
+        children[2] = (int2)(a.x, a.x + 1);
+        k = 3;
+      } else if (!overlap_known &&
+                 !cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
+        if (in_front) CS_FRONT_EMIT(q);
+      } else if (a.x < 0 && b.x < 0) {
+        const uint fa = (uint)cs_node_face(a), fb = (uint)cs_node_face(b);
+        if (!cs_faces_adjacent(faces, fa, fb)) CS_EMIT(pairs, (uint2)(fa, fb));
+        if (in_front) CS_FRONT_EMIT(q);
+      } else {
         if (in_front && level == cap) CS_FRONT_EMIT(q);
-        if (cs_descends_first(a, b)) {
-          stack[top++] = (int2)(a.x, q.y);
-          stack[top++] = (int2)(a.x + 1, q.y);
-        } else {
-          stack[top++] = (int2)(q.x, b.x);
-          stack[top++] = (int2)(q.x, b.x + 1);
-        }
+        const int first = cs_descends_first(a, b);
+        children[0] = first ? (int2)(a.x, q.y) : (int2)(q.x, b.x);
+        children[1] = first ? (int2)(a.x + 1, q.y) : (int2)(q.x, b.x + 1);
+        k = 2;
+      }
+      for (int j = 0; j < k; ++j) {
+        const uint at = atomic_inc(&waiting_count);
+        if (at < CS_SHARED_SEARCH) waiting[at] = children[j];
+        else stack[top++] = children[j];
       }
     }
   }

@@ -186,6 +186,35 @@ TEST_CASE("run --no-profile reports the same contacts, its wall time and no devi
   CHECK(report["steps"][0]["commands"].empty());
 }
 
+// A user replaying a sequence sees a hitch without a per-step table: the tail names the
+// slowest step by its frame and the 90th percentile, from the very steps listed.
+TEST_CASE("run --json gives the tail of a sequence's step times: the slowest step and the 90th percentile",
+          "[cli][quick]")
+{
+  const fs::path dir = fresh_dir("cstreams-cli-tail");
+  const fs::path cloth = dir / "cloth";
+  execute({"generate", "cloth-sphere", "--out", cloth.string(), "--frames", "13", "--resolution", "16"});
+  execute({"run", (cloth / "scene.json").string(), "--frames", "2:12", "--json", (dir / "run.json").string()});
+  const auto report = nlohmann::json::parse(std::ifstream(dir / "run.json"));
+  const auto& steps = report["steps"];
+  REQUIRE(steps.size() == 10);
+  for (const char* time : {"host_ms", "step_ms"}) {
+    INFO(time);
+    std::vector<double> per_step;
+    for (const auto& s : steps) per_step.push_back(s[time].get<double>());
+    const auto slowest = std::max_element(per_step.begin(), per_step.end());
+    const auto& t = report["tail"][time];
+    CHECK(t["max"].get<double>() == *slowest);
+    CHECK(t["max_frame"].get<std::size_t>() == steps[std::size_t(slowest - per_step.begin())]["frame"].get<std::size_t>());
+    // Nearest rank: the 9th of 10 sorted steps.
+    std::sort(per_step.begin(), per_step.end());
+    CHECK(t["p90"].get<double>() == per_step[8]);
+    CHECK(t["median"].get<double>() == 0.5 * (per_step[4] + per_step[5]));
+  }
+  if (!steps[0]["device_ms"].is_null()) CHECK(report["tail"]["device_ms"]["max"].get<double>() > 0);
+  else CHECK(report["tail"]["device_ms"]["max"].is_null());
+}
+
 // The device's span of a step holds its passes one after another (one in-order queue)
 // and the idle time between them: no shorter than their sum, and within the step's
 // wall time. Its commands, each timed, show where that idle time went: every launch and

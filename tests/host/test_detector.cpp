@@ -430,7 +430,7 @@ TEST_CASE("a device that ends loops early reports the same contacts, searching f
     CHECK(same(run_frames(cloth, options, 10, 16, nullptr, limited, &retries), run_frames(cloth, options, 10, 16)));
     CHECK(retries > 0);
   }
-  options.front_budget_mb = 2;
+  options.front_budget_mb = 0.125;
   CHECK_THROWS_WITH(run_frames(cloth, options, 10, 11, nullptr, limited),
                     Catch::Contains("runs out of the device's loop trips") && Catch::Contains("within the front's budget"));
 }

@@ -137,6 +137,23 @@ double median(std::vector<double> v)
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
+Tail tail(const std::vector<double>& per_step, std::size_t first_frame)
+{
+  Tail t;
+  if (per_step.empty()) return t;
+  if (std::any_of(per_step.begin(), per_step.end(), [](double v) { return std::isnan(v); })) {
+    t.p90 = t.max = std::numeric_limits<double>::quiet_NaN();
+    return t;
+  }
+  std::vector<double> sorted = per_step;
+  std::sort(sorted.begin(), sorted.end());
+  t.p90 = sorted[std::size_t(std::ceil(0.9 * double(sorted.size()))) - 1];
+  const auto slowest = std::max_element(per_step.begin(), per_step.end());
+  t.max = *slowest;
+  t.max_frame = first_frame + std::size_t(slowest - per_step.begin());
+  return t;
+}
+
 SceneSource::~SceneSource()
 {
   std::error_code ignored;

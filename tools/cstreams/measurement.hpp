@@ -54,6 +54,15 @@ bool uploads_ahead(const MeasureOptions& o);
 
 double median(std::vector<double> v);
 
+// The tail of a run's per-step times, so that a hitch shows without a per-step table:
+// the 90th percentile (nearest rank) and the slowest step with its first frame. NaN
+// times (an untimed device) make every figure NaN.
+struct Tail {
+  double p90 = 0, max = 0;
+  std::size_t max_frame = 0;
+};
+Tail tail(const std::vector<double>& per_step, std::size_t first_frame);
+
 // The scene to measure: the given one, or the bundled default, generated into a
 // temporary folder that is removed with this object, so that commands run anywhere.
 struct SceneSource {

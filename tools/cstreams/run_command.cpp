@@ -51,6 +51,16 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
   else
     std::printf("time      %.3f ms per step (median wall time), %.3f ms of it on the device\n", median(report.host_ms),
                 median(report.device_ms));
+  if (last - first > 1) {
+    // The slowest step by wall time, and what the device took of it; --json has the
+    // device's own slowest step too.
+    const Tail wall = tail(report.host_ms, first);
+    std::printf("tail      %.3f ms at the 90th percentile; slowest step %zu (frame %zu to %zu), %.3f ms", wall.p90,
+                wall.max_frame - first + 1, wall.max_frame, wall.max_frame + 1, wall.max);
+    const double device_ms = report.device_ms[wall.max_frame - first];
+    if (!std::isnan(device_ms)) std::printf(", %.3f ms of it on the device", device_ms);
+    std::printf("\n");
+  }
   std::printf("uploads   %.3f ms per step with its positions' uploads (%s)\n", median(report.step_ms),
               uploads_ahead(o) ? "made while the step before ran" : "made before it");
   std::printf("memory    %.1f MiB on the device at most (during a step)\n", double(report.peak_bytes) / (1 << 20));
@@ -71,6 +81,14 @@ void print_tables(Measurement& report)
   for (const auto& name : report.pass_order) std::printf("  %-44s %9.3f\n", name.c_str(), median(report.pass_ms[name]));
   std::printf("  %-44s %9.3f\n  %-44s %9.3f\n", "all passes", median(report.device_ms), "step (host wall time)",
               median(report.host_ms));
+}
+
+// A NaN (an untimed device's time) is null in JSON.
+nlohmann::json tail_json(const std::vector<double>& per_step, std::size_t first)
+{
+  const Tail t = tail(per_step, first);
+  const auto number = [](double v) { return std::isnan(v) ? nlohmann::json() : nlohmann::json(v); };
+  return {{"median", number(median(per_step))}, {"p90", number(t.p90)}, {"max", number(t.max)}, {"max_frame", t.max_frame}};
 }
 
 void check(const RunOptions& o)
@@ -117,6 +135,9 @@ void run(const RunOptions& o)
                      {"median_host_ms", median(report.host_ms)},
                      {"median_device_ms", median(report.device_ms)},
                      {"median_step_ms", median(report.step_ms)},
+                     {"tail", {{"host_ms", tail_json(report.host_ms, first)},
+                               {"device_ms", tail_json(report.device_ms, first)},
+                               {"step_ms", tail_json(report.step_ms, first)}}},
                      {"peak_bytes", report.peak_bytes},
                      {"steps", report.steps}};
     write_file_atomically(o.json, [&](std::ostream& out) { out << j.dump(1) << "\n"; });
