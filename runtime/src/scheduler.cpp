@@ -650,13 +650,13 @@ struct Scheduler::State {
   }
 
   // A planned group spills only what it emits beyond its last run's and an eighth: the
-  // pool holds twice what the last run spilled, and an item a group or one group's
-  // burst of 16 items a work-item, whichever is more (16 a group took 9 MiB of n-body's
-  // step at its peak, and none spilled). A pool that overflows grows fourfold for the
-  // next run; a rerun, planned from its own input, spills nothing. A group the plan
-  // lacks gets 16 items where it has the context's size, and as many fewer as it has
-  // fewer work-items: the decomposition's first run in groups of 128 held 9 MiB more
-  // on n-body at 16 a group, with each spilled item's two words of place.
+  // pool holds twice what the last run spilled (adopt_plan), and an item a group or one
+  // group's burst of 16 items a work-item, whichever is more (16 a group took 9 MiB of
+  // n-body's step at its peak, and none spilled). A rerun, planned from its own input,
+  // spills nothing. A group the plan lacks gets 16 items where it has the context's
+  // size, and as many fewer as it has fewer work-items: the decomposition's first run
+  // in groups of 128 held 9 MiB more on n-body at 16 a group, with each spilled item's
+  // two words of place.
   std::uint64_t spill_pool_items(const EmitterState& e, std::size_t segments) const
   {
     const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
@@ -1162,13 +1162,19 @@ struct Scheduler::State {
   }
 
   // Segmented lock: this execution's counts plan the next one's segments, and where its
-  // own were planned from the run before, what it spilled (up to twice its pool) sizes
-  // the next pool: how much a step outgrows the one before. Not an unplanned execution's
-  // (a first step's, searched from the roots: cloth-ball's next steps then peaked 11%
-  // above a settled one), nor a rerun's, planned from its own counts.
+  // own were planned from the run before, what it spilled sizes the next pool: how much
+  // a step outgrows the one before, or how far its groups' work moved. The count goes on
+  // past the pool, so a pool that overflowed takes at once what the next step needs if
+  // it outgrows this one as much: a sequence whose front grew a fifth a step (the
+  // 1.5M-triangle sheet) had run its front update twice in most steps while the pool
+  // grew fourfold a step. Up to half of what it emitted, so that after a burst (a step
+  // where contact surges) the next step's pool holds no more than that step emitted. Not an
+  // unplanned execution's (a first step's, searched from the roots: cloth-ball's next
+  // steps then peaked 11% above a settled one), nor a rerun's, planned from its own counts.
   void adopt_plan(EmitterState& e)
   {
-    if (e.planned > 0 && !e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], 2 * e.pool);
+    if (e.planned > 0 && !e.exact_plan)
+      e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], host_counters[state(e.stream).slot] / 2);
     std::swap(e.plan, e.offsets);
     e.planned = e.segments;
     e.planned_total = host_counters[state(e.stream).slot];

@@ -386,6 +386,28 @@ TEST_CASE("a spill pool that overflowed grows: steps that each outgrow the last 
   CHECK(later == 0);
 }
 
+// A front that grows a fifth a step spills far past the least pool every step; the pool
+// takes what the last step spilled (its count goes on past the pool), so only the first
+// such step runs twice, where a pool growing fourfold from its least had rerun the pass
+// in every step.
+TEST_CASE("a spill pool takes twice what spilled: steps that each outgrow the last as much rerun only the first",
+          "[runtime][scheduler][quick]")
+{
+  SegmentedExpansion e;
+  const std::size_t n = e.n;
+  auto v = random_values(n, 67);
+  e.run(v);
+  CHECK(e.run(v) == 0);
+  // An eighth of the values more burst each step: 40 items each, a hundred thousand
+  // spilled items a step, against a least pool of 16 items a work-item of one group.
+  std::vector<std::size_t> reruns;
+  for (std::size_t step = 0; step < 4; ++step) {
+    for (std::size_t i = step * n / 8; i < (step + 1) * n / 8; ++i) v[i] = cstreams::test::value_emitting(40);
+    reruns.push_back(e.run(v));
+  }
+  CHECK(reruns == std::vector<std::size_t>{1, 0, 0, 0});
+}
+
 // Values expand into pairs; in the next stage a pass copies the pairs' first words, one
 // per pair: half the bytes.
 struct ExpandThenCopy {
