@@ -241,6 +241,18 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePa
   return front;
 }
 
+std::vector<NodePair> spread_over_groups(const std::vector<NodePair>& front, std::size_t group)
+{
+  // The input read as rows of `groups` pairs and written column by column: the pairs
+  // of one work-group lie `groups` apart in the input, across all of it.
+  const std::size_t groups = std::max<std::size_t>(1, (front.size() + group - 1) / std::max<std::size_t>(group, 1));
+  std::vector<NodePair> spread;
+  spread.reserve(front.size());
+  for (std::size_t first = 0; first < groups; ++first)
+    for (std::size_t k = first; k < front.size(); k += groups) spread.push_back(front[k]);
+  return spread;
+}
+
 namespace {
 
 // Positions, topology and whether the positions are the exact input, which every kernel

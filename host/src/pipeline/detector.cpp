@@ -95,7 +95,8 @@ bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 struct Detector::State {
   State(runtime::Context& device, SceneDescription s, const DetectorOptions& o)
       : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
-        front(o, layout, 4 * device.device().compute_units * device.work_group_size(), device.loop_trip_limit() != 0),
+        front(o, layout, 4 * device.device().compute_units * device.work_group_size(), device.work_group_size(),
+              device.loop_trip_limit() != 0),
         ids(layout), readback(device, layout, scene, o.solver.precision)
   {
     const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());

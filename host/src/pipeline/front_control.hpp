@@ -20,11 +20,12 @@ namespace cstreams {
 class FrontControl {
 public:
   FrontControl(const DetectorOptions& options, const SceneLayout& layout, std::size_t work_items,
-               bool bounded_loops);
+               std::size_t work_group, bool bounded_loops);
 
   // The pairs the first front should hold: enough work for the device, within budget.
   std::size_t initial_target() const { return target_; }
-  // Gives a new scheduler the first front, its limits and the level cap.
+  // Gives a new scheduler the first front (seeds searched every step spread over the
+  // work-groups that search them: spread_over_groups), its limits and the level cap.
   void install(runtime::Scheduler& scheduler, const CcdStreams& streams, const std::vector<NodePair>& seeds) const;
   // Runs the graph; returns how many runs were repeated at a coarser or finer front.
   unsigned run(runtime::Scheduler& scheduler, const CcdStreams& streams);
@@ -42,6 +43,7 @@ private:
   std::uint32_t deepest_level_ = 0;
   std::size_t front_limit_ = 0;
   std::size_t target_;
+  std::size_t work_group_;
   const SceneLayout* layout_;
   bool bounded_loops_;
 };
