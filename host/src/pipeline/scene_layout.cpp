@@ -1,0 +1,253 @@
+#include <cstreams/pipeline/scene_layout.hpp>
+#include <cstreams/errors.hpp>
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+namespace cstreams {
+
+namespace {
+
+// Depth-first BVTT search holds at most 2 * depth + 1 pairs (see broad_phase.cl);
+// CS_BVTT_STACK = 128 covers trees of up to 40 levels, about 2^39 faces.
+constexpr std::size_t max_tree_depth = 40;
+static_assert(max_tree_depth < (std::size_t(1) << node_depth_bits) &&
+                  max_scene_nodes <= (std::size_t(1) << (32 - node_depth_bits)),
+              "a device node's word holds every depth and parent + 1");
+
+void check_object(const ObjectDescription& o)
+{
+  const std::string what = "object '" + o.name + "': ";
+  if (o.faces.empty()) throw InputError(what + "has no faces");
+  const std::size_t n = o.positions.size();
+  for (std::size_t f = 0; f < o.faces.size(); ++f) {
+    const Face& face = o.faces[f];
+    for (std::uint32_t v : face)
+      if (v >= n)
+        throw InputError(what + "face " + std::to_string(f) + " uses vertex " + std::to_string(v) + " of " +
+                         std::to_string(n));
+    if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2])
+      throw InputError(what + "face " + std::to_string(f) + " repeats a vertex");
+  }
+  try {
+    to_float_positions(o.positions);
+  } catch (const InputError& e) {
+    throw InputError(what + e.what());
+  }
+}
+
+std::vector<std::uint32_t> node_depths(const Bvh& bvh)
+{
+  std::vector<std::uint32_t> depth(bvh.nodes.size());
+  for (std::size_t d = 0; d < bvh.depth(); ++d)
+    for (std::uint32_t i = bvh.level_offsets[d]; i < bvh.level_offsets[d + 1]; ++i) depth[i] = std::uint32_t(d);
+  return depth;
+}
+
+}  // namespace
+
+SceneLayout make_layout(const SceneDescription& scene, double separation)
+{
+  SceneLayout l;
+  const auto n = std::uint32_t(scene.objects.size());
+  for (std::uint32_t o = 0; o < n; ++o) {
+    check_object(scene.objects[o]);
+    for (std::uint32_t p = 0; p < o; ++p)
+      if (scene.objects[p].name == scene.objects[o].name)
+        throw InputError("two objects are named '" + scene.objects[o].name + "'");
+  }
+  for (const auto& [a, b] : scene.ignored_pairs)
+    if (a >= n || b >= n) throw InputError("an ignored pair names object " + std::to_string(std::max(a, b)) + " of " + std::to_string(n));
+
+  std::vector<Topology> topologies(n);
+  l.trees.resize(n);
+  for (std::uint32_t o = 0; o < n; ++o) {
+    const ObjectDescription& d = scene.objects[o];
+    topologies[o] = build_topology(d.faces, d.positions.size());
+    l.trees[o] = build_bvh(swept_bounds(topologies[o], d.positions, d.positions, separation).faces);
+    if (l.trees[o].depth() > max_tree_depth)
+      throw InputError("object '" + d.name + "': its BVH has " + std::to_string(l.trees[o].depth()) +
+                       " levels, more than the traversal's stack allows (" + std::to_string(max_tree_depth) + ")");
+    l.depth = std::max(l.depth, l.trees[o].depth());
+  }
+  std::size_t nodes = 0;
+  for (const Bvh& t : l.trees) nodes += t.nodes.size();
+  if (nodes >= max_scene_nodes)
+    throw InputError("the scene's BVHs have " + std::to_string(nodes) + " nodes, more than the " +
+                     std::to_string(max_scene_nodes - 1) + " a face's word on the device can name");
+
+  // Slots: moving objects, then static ones.
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::uint32_t o = 0; o < n; ++o) {
+      const ObjectDescription& d = scene.objects[o];
+      const bool moving = d.kind != ObjectKind::static_;
+      if (moving != (pass == 0)) continue;
+      ObjectSlot s;
+      s.object = o;
+      s.moving = moving;
+      s.self = scene.may_collide(o, o);
+      if (!l.slots.empty()) {
+        const ObjectSlot& p = l.slots.back();
+        const Topology& pt = topologies[p.object];
+        s.first_vertex = p.first_vertex + std::uint32_t(pt.vertex_count);
+        s.first_face = p.first_face + std::uint32_t(pt.faces.size());
+        s.first_edge = p.first_edge + std::uint32_t(pt.edges.size());
+      }
+      l.slots.push_back(s);
+    }
+  l.slot_of.resize(n);
+  for (std::uint32_t i = 0; i < l.slots.size(); ++i) l.slot_of[l.slots[i].object] = i;
+
+  // The forest: moving trees interleaved level by level, then static trees whole.
+  std::vector<std::vector<std::int32_t>> global(n);
+  std::int32_t next = 0;
+  for (std::size_t d = 0;; ++d) {
+    bool any = false;
+    l.levels.push_back(std::uint32_t(next));
+    for (const ObjectSlot& s : l.slots) {
+      const Bvh& t = l.trees[s.object];
+      if (!s.moving || d >= t.depth()) continue;
+      global[s.object].resize(t.nodes.size());
+      for (std::uint32_t i = t.level_offsets[d]; i < t.level_offsets[d + 1]; ++i) global[s.object][i] = next++;
+      any = true;
+    }
+    if (!any) {
+      l.levels.pop_back();
+      break;
+    }
+  }
+  if (l.levels.size() > 0) l.levels.push_back(std::uint32_t(next));
+  l.moving_nodes = std::size_t(next);
+  for (ObjectSlot& s : l.slots) {
+    const Bvh& t = l.trees[s.object];
+    if (!s.moving) {
+      s.first_node = std::uint32_t(next);
+      global[s.object].resize(t.nodes.size());
+      for (std::size_t i = 0; i < t.nodes.size(); ++i) global[s.object][i] = next++;
+    }
+    s.root = global[s.object][0];
+  }
+  l.nodes.resize(std::size_t(next));
+  for (const ObjectSlot& s : l.slots) {
+    const Bvh& t = l.trees[s.object];
+    const auto depth = node_depths(t);
+    const auto& g = global[s.object];
+    for (std::size_t i = 0; i < t.nodes.size(); ++i) {
+      const BvhNode& node = t.nodes[i];
+      l.nodes[std::size_t(g[i])] = {node.left < 0 ? -1 : g[std::size_t(node.left)],
+                                    node.face < 0 ? -1 : node.face + std::int32_t(s.first_face),
+                                    node.parent < 0 ? -1 : g[std::size_t(node.parent)], std::int32_t(depth[i])};
+    }
+  }
+
+  // Global topology: concatenating the objects' meshes keeps each one's edge order and
+  // feature ownership, so the union's topology is theirs at offsets.
+  std::vector<Face> faces;
+  for (const ObjectSlot& s : l.slots) {
+    const Topology& t = topologies[s.object];
+    for (const Face& f : t.faces) faces.push_back({f[0] + s.first_vertex, f[1] + s.first_vertex, f[2] + s.first_vertex});
+    l.vertex_object.insert(l.vertex_object.end(), t.vertex_count, s.object);
+    if (s.moving) {
+      l.moving_vertices += t.vertex_count;
+      l.moving_faces += t.faces.size();
+      l.moving_edges += t.edges.size();
+    }
+    if (s.self) {
+      const OrphanSet orphans = build_orphans(t);
+      for (const VertexFace& p : orphans.vf) l.orphans.vf.push_back({p.vertex + s.first_vertex, p.face + s.first_face});
+      for (const EdgeEdge& p : orphans.ee) l.orphans.ee.push_back({p.a + s.first_edge, p.b + s.first_edge});
+    }
+  }
+  l.topology = build_topology(faces, l.vertex_object.size());
+
+  for (std::size_t i = 0; i < l.slots.size(); ++i)
+    for (std::size_t j = i; j < l.slots.size(); ++j)
+      if (scene.may_collide(l.slots[i].object, l.slots[j].object)) l.seeds.push_back({l.slots[i].root, l.slots[j].root});
+  return l;
+}
+
+RefitPlan plan_refit(const SceneLayout& layout, std::size_t group)
+{
+  RefitPlan plan;
+  if (layout.levels.size() < 2) return plan;
+  std::size_t levels = 1;
+  while ((std::size_t(1) << levels) <= group) ++levels;
+  // The top band is one group's alone, which may take four nodes a work-item at its
+  // deepest level: two levels more, and a launch fewer where they are all that is left
+  // (n-body's level 0 took a launch of 4 us on the H100).
+  const std::size_t top_levels = levels + 2;
+  for (std::size_t end = layout.levels.size() - 1; end > 0;) {
+    const std::size_t top = end > top_levels ? end - levels : 0;
+    plan.bands.push_back({top, end - top, plan.ranges.size()});
+    for (std::uint32_t n = layout.levels[top]; n < layout.levels[top + 1]; ++n) {
+      std::array<std::uint32_t, 2> range{n, n + 1};
+      for (std::size_t level = top; level < end; ++level) {
+        plan.ranges.push_back(range);
+        std::array<std::uint32_t, 2> below{0, 0};
+        for (std::uint32_t m = range[0]; m < range[1]; ++m)
+          if (const std::int32_t child = layout.nodes[m][0]; child >= 0) {
+            if (below[0] == below[1]) below[0] = std::uint32_t(child);
+            below[1] = std::uint32_t(child) + 2;
+          }
+        range = below;
+      }
+    }
+    end = top;
+  }
+  return plan;
+}
+
+std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target)
+{
+  return expand_front(layout, layout.seeds, target, std::numeric_limits<std::size_t>::max());
+}
+
+std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePair> front, std::size_t target,
+                                   std::size_t most)
+{
+  // The same choices as cs_front_update, without the bounds tests.
+  const auto& nodes = layout.nodes;
+  while (front.size() < target) {
+    std::vector<NodePair> next;
+    bool expanded = false;
+    for (std::size_t k = 0; k < front.size(); ++k) {
+      // A pair's children add at most two pairs; past `most`, the rest stay as they are.
+      if (next.size() + (front.size() - k) + 2 > most) {
+        next.insert(next.end(), front.begin() + std::ptrdiff_t(k), front.end());
+        break;
+      }
+      const auto [i, j] = front[k];
+      const auto &a = nodes[std::size_t(i)], &b = nodes[std::size_t(j)];
+      if (i == j) {
+        if (a[0] < 0) continue;  // a leaf against itself pairs nothing
+        next.insert(next.end(), {{a[0], a[0] + 1}, {a[0], a[0]}, {a[0] + 1, a[0] + 1}});
+      } else if (a[0] < 0 && b[0] < 0) {
+        next.push_back({i, j});
+        continue;
+      } else if (a[0] >= 0 && (b[0] < 0 || a[3] <= b[3])) {
+        next.insert(next.end(), {{a[0], j}, {a[0] + 1, j}});
+      } else {
+        next.insert(next.end(), {{i, b[0]}, {i, b[0] + 1}});
+      }
+      expanded = true;
+    }
+    front = std::move(next);
+    if (!expanded) break;
+  }
+  return front;
+}
+
+std::vector<NodePair> spread_over_groups(const std::vector<NodePair>& front, std::size_t group)
+{
+  // The input read as rows of `groups` pairs and written column by column: the pairs
+  // of one work-group lie `groups` apart in the input, across all of it.
+  const std::size_t groups = std::max<std::size_t>(1, (front.size() + group - 1) / std::max<std::size_t>(group, 1));
+  std::vector<NodePair> spread;
+  spread.reserve(front.size());
+  for (std::size_t first = 0; first < groups; ++first)
+    for (std::size_t k = first; k < front.size(); k += groups) spread.push_back(front[k]);
+  return spread;
+}
+
+}  // namespace cstreams
