@@ -1,0 +1,211 @@
+// Work lists: rounds on the device, growth and replay, counts with the stage's counters,
+// extra state behind a parameter, and slices.
+#include "scheduler_graphs.hpp"
+
+#include <cstreams/runtime/error.hpp>
+#include <cstreams/runtime/scheduler.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cstring>
+#include <memory>
+#include <random>
+
+using namespace cstreams::runtime;
+using namespace cstreams::test;
+using cstreams::test::Pair;
+using cstreams::test::Quad;
+
+namespace {
+
+// The work list of test_tree_* (stream_test.cl) over `n` values, with the deepest leaf
+// of each input in its extra state while `deepest` is set.
+struct Tree {
+  StreamId values, counted;
+  ParamId deepest;
+};
+
+Tree add_tree(StreamGraph& g, std::size_t n, std::size_t round_items, std::size_t round_group)
+{
+  Tree t{g.fixed("values", 4, n), g.variable("counted", 8, 16), g.param("deepest", 4)};
+  Worklist list{"test_tree_seed", "test_tree_round", 8, 4, 2 * round_items, round_group};
+  list.extra_state_bytes = 4;
+  list.extra_state_while = t.deepest;
+  g.pass("tree", {program, "test_tree_finish"})
+      .launch_over(t.values)
+      .refine(list)
+      .emit(t.counted)
+      .arg(buffer_of(t.values))
+      .arg(count_of(t.values))
+      .arg(param_of(t.deepest));
+  return t;
+}
+
+std::uint32_t tree_depth(std::uint32_t value) { return cstreams::test::test_hash(value ^ 0x9e3779b9u) % 12u; }
+
+// Input i's leaves (2^depth a tree, two trees for odd values), and with `with_depth`
+// the count shifted left by four bits with the depth below.
+std::vector<Pair> tree_counts(const std::vector<std::uint32_t>& v, bool with_depth)
+{
+  std::vector<Pair> counts;
+  for (std::uint32_t i = 0; i < v.size(); ++i) {
+    const std::uint32_t leaves = (v[i] & 1u ? 2u : 1u) << tree_depth(v[i]);
+    counts.push_back({i, with_depth ? leaves << 4 | tree_depth(v[i]) : leaves});
+  }
+  return counts;
+}
+
+// Items over all rounds: a tree of depth d holds 2^(d+1) - 1 of them.
+std::uint64_t tree_items(const std::vector<std::uint32_t>& v)
+{
+  std::uint64_t items = 0;
+  for (const std::uint32_t value : v) items += (value & 1u ? 2u : 1u) * ((std::uint64_t(2) << tree_depth(value)) - 1);
+  return items;
+}
+
+}  // namespace
+
+TEST_CASE("a work list runs its rounds on the device, grows when it overflows and goes on, losing no item",
+          "[runtime][scheduler][worklist][quick]")
+{
+  // Odd inputs are seeded with two first items (test_tree_seed), so the seed's own
+  // appends count, and can overflow the list, too.
+  // On a device that ends loops early (asked for here), rounds go over exactly their
+  // items, read back one by one.
+  Context limited(filter_from_environment(), 0, 4096);
+  limited.programs().add_sources(test_kernel_sources());
+  const bool bounded = GENERATE(false, true);
+  // Rounds in the context's groups, and in small groups of their own.
+  const std::size_t round_group = GENERATE(std::size_t(0), std::size_t(32));
+  auto& ctx = bounded ? limited : cstreams::test::device();
+  for (const std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(3001)}) {
+    StreamGraph g;
+    const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), round_group);
+    Scheduler s(ctx, g);
+    s.set(tree_streams.deepest, cl_uint(0));
+    const auto v = random_values(n, 23);
+    const std::vector<Pair> expected = tree_counts(v, false);
+    const std::uint64_t items = tree_items(v);
+    unsigned deepest = 0;
+    for (const std::uint32_t value : v) deepest = std::max(deepest, tree_depth(value) + 1);
+    s.upload(tree_streams.values, v);
+    for (int frame = 0; frame < 2; ++frame) {
+      INFO("n = " << n << ", frame " << frame << (bounded ? ", bounded loops" : "") << ", round group " << round_group);
+      s.run();
+      CHECK(sorted(s.download<Pair>(tree_streams.counted)) == expected);
+      const PassStats& tree = s.stats().passes.at(0);
+      CHECK(tree.rounds == deepest);
+      CHECK(tree.list_items == items);
+      if (n > 1000) CHECK((frame == 0 ? tree.reruns > 0 : tree.reruns == 0));  // a list sized for the inputs overflows once
+      if (n == 0) CHECK(tree.launches == 1);  // nothing to seed: only the emitting kernel
+      if (bounded && n > 0) CHECK(s.stats().readbacks >= deepest);
+      // One launch a round, the seed and the finish; an overflowing round runs once
+      // more, and an overflowing seed once more with the round that found it so.
+      if (bounded && n > 0) CHECK(tree.launches <= 2 + deepest + 2 * tree.reruns);
+    }
+  }
+}
+
+// The counts after a batch of rounds come back with the stage's counters, so a run that
+// the last runs' rounds settle waits for one read; one that needs more rounds goes on
+// from where its batch ended, and the pass emits again from the settled state.
+TEST_CASE("a work list's counts come back with its stage's counters, and rounds beyond the last runs' go on",
+          "[runtime][scheduler][worklist][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 3001;
+  const std::vector<std::uint32_t> deep = random_values(n, 37);
+  std::vector<std::uint32_t> shallow;
+  for (std::uint32_t seed = 41; shallow.size() < n; ++seed)
+    for (const std::uint32_t value : random_values(n, seed))
+      if (tree_depth(value) < 4 && shallow.size() < n) shallow.push_back(value);
+  const auto rounds_of = [](const std::vector<std::uint32_t>& v) {
+    unsigned deepest = 0;
+    for (const std::uint32_t value : v) deepest = std::max(deepest, tree_depth(value) + 1);
+    return deepest;
+  };
+  REQUIRE(rounds_of(shallow) < rounds_of(deep));
+  StreamGraph g;
+  const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0);
+  Scheduler s(ctx, g);
+  s.set(tree_streams.deepest, cl_uint(0));
+  // After the deep trees, shallow ones take a first batch as long as the deep ones'
+  // (the most of the last runs'): their rounds end within it.
+  const std::vector<std::pair<const std::vector<std::uint32_t>*, bool>> runs = {
+      {&shallow, false}, {&shallow, true}, {&deep, false}, {&deep, true}, {&shallow, true}};
+  for (const auto& [v, within_first_batch] : runs) {
+    s.upload(tree_streams.values, *v);
+    s.run();
+    INFO((v == &deep ? "deep" : "shallow") << " trees" << (within_first_batch ? ", within the first batch" : ""));
+    CHECK(sorted(s.download<Pair>(tree_streams.counted)) == tree_counts(*v, false));
+    const PassStats& tree = s.stats().passes.at(0);
+    CHECK(tree.rounds == rounds_of(*v));
+    CHECK(tree.list_items == tree_items(*v));
+    if (ctx.loop_trip_limit() != 0) CHECK(s.stats().readbacks >= tree.rounds);
+    else if (within_first_batch) CHECK(s.stats().readbacks == 1);
+    else CHECK(s.stats().readbacks > 1);
+  }
+}
+
+// An optional mode's state (refine.cl's earliest box starts, kept only for steps that
+// report earliest times alone) costs nothing while the mode is off.
+TEST_CASE("a work list holds its extra state only while its parameter is set", "[runtime][scheduler][worklist][quick]")
+{
+  auto& ctx = cstreams::test::device();
+  const std::size_t n = 3001;
+  StreamGraph g;
+  const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0);
+  Scheduler s(ctx, g);
+  const auto v = random_values(n, 29);
+  s.upload(tree_streams.values, v);
+  const auto run = [&](cl_uint deepest) {
+    s.set(tree_streams.deepest, deepest);
+    s.run();
+    CHECK(sorted(s.download<Pair>(tree_streams.counted)) == tree_counts(v, deepest != 0));
+    return s.stats().passes.at(0).scratch_bytes;
+  };
+  run(0);  // the list grows to its size
+  const std::size_t without = run(0);
+  CHECK(run(1) == without + 4 * n);
+  CHECK(run(0) == without + 4 * n);  // held, as the state is, until memory runs short
+}
+
+// Short of memory for its lists, a work list runs in slices of its inputs; its
+// statistics add up the slices, as a step's would without them.
+TEST_CASE("a work list run in slices reports the rounds and items of all of them", "[runtime][scheduler][worklist][quick]")
+{
+  const std::size_t n = 3001;
+  const auto v = random_values(n, 31);
+  const std::uint64_t items = tree_items(v);
+  std::size_t peak = 0;
+  unsigned whole_rounds = 0;
+  for (const double share : {1.0, 0.5}) {
+    Context context(filter_from_environment());
+    context.programs().add_sources(test_kernel_sources());
+    if (share < 1) context.set_memory_limit(std::size_t(share * double(peak)));
+    StreamGraph g;
+    const Tree tree_streams = add_tree(g, n, context.work_group_size(), 0);
+    g.gather(tree_streams.counted);
+    Scheduler s(context, g);
+    s.set(tree_streams.deepest, cl_uint(0));
+    s.upload(tree_streams.values, v);
+    for (int frame = 0; frame < 2; ++frame) s.run();
+    INFO("share " << share << " of the peak, " << peak << " bytes");
+    // A slice's kernels number its inputs from 0: the counts alone must match.
+    const auto leaves = [](const std::vector<Pair>& counted) {
+      std::vector<std::uint32_t> c;
+      for (const Pair& p : counted) c.push_back(p[1]);
+      return sorted(c);
+    };
+    CHECK(leaves(s.download<Pair>(tree_streams.counted)) == leaves(tree_counts(v, false)));
+    const PassStats& tree = s.stats().passes.at(0);
+    CHECK(tree.list_items == items);
+    if (share < 1) {
+      CHECK(s.stats().slices > 1);
+      CHECK(tree.rounds > whole_rounds);
+    }
+    peak = context.memory_high_water();
+    whole_rounds = tree.rounds;
+  }
+}
