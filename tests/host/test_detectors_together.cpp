@@ -2,6 +2,7 @@
 // each reports what it reports alone, and memory stays flat.
 #include "../support/test_device.hpp"
 #include "../support/test_scenes.hpp"
+#include "detector_steps.hpp"
 
 #include <cstreams/detector.hpp>
 #include <cstreams/devices.hpp>
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 using namespace cstreams;
+using cstreams::test::same;
 
 namespace {
 
@@ -44,17 +46,6 @@ StepContacts alone(const Scene& scene, std::size_t first, std::size_t steps)
   Run run{scene, detector, first, {}};
   for (std::size_t i = 0; i < steps; ++i) run.next();
   return run.contacts;
-}
-
-bool same(const StepContacts& a, const StepContacts& b)
-{
-  if (a.size() != b.size()) return false;
-  for (std::size_t s = 0; s < a.size(); ++s) {
-    if (a[s].size() != b[s].size()) return false;
-    for (std::size_t i = 0; i < a[s].size(); ++i)
-      if (!a[s][i].same_features(b[s][i]) || a[s][i].toi != b[s][i].toi) return false;
-  }
-  return true;
 }
 
 std::size_t contact_count(const StepContacts& c)
