@@ -89,8 +89,9 @@ inline uint cs_level(__global const int2* nodes, const int2 p)
   return (uint)(cs_node_depth(nodes[p.x]) + cs_node_depth(nodes[p.y]));
 }
 
-/* A search's pairs waiting for a work-item of the group (cs_front_update): as many as
- * eight rounds of the group's work-items can push, 16 KiB in groups of 256. */
+/* A search's pairs waiting for a work-item of the group (cs_front_update): eight a
+ * work-item, 16 KiB in groups of 256, within the 32 KiB of local memory an HD 5870
+ * gives a group. */
 #define CS_SHARED_SEARCH (8 * CS_WG_SIZE)
 
 /* A pair waiting in a search, with whether its boxes are known to overlap (the pair a
