@@ -206,7 +206,7 @@ void add_generate_command(CLI::App& app, Command& command)
   cmd->add_option("--out", o->folder, "Folder to write into")->required();
   cmd->add_option("--seed", o->seed, "Random seed (same seed, same files)");
   cmd->add_option("--frames", o->frames, "Number of frames (default: the scene's)");
-  cmd->add_option("--resolution", o->resolution, "Size parameter (default: the scene's; see README)");
+  cmd->add_option("--resolution", o->resolution, "Size parameter (default: the scene's; see docs/command-line.md)");
   cmd->callback([o, &command] {
     // Bounds that keep a typo from asking for terabytes of frames.
     check_option("--frames", o->frames, {0, 100000});
