@@ -381,6 +381,23 @@ TEST_CASE("bad input at the API is a clear error and the detector stays usable",
   CHECK_THROWS_WITH(Detector(cstreams::test::device(), broken), Catch::Contains("face 0 uses vertex 3 of 3"));
 }
 
+// The front update's work-group searches from a list of eight pairs a work-item in local
+// memory; children that find it full are searched on the work-item's own stack. Groups
+// of four work-items fill their lists of 32 pairs at every search from seeds.
+TEST_CASE("a front update whose groups' lists fill reports the contacts of one whose lists never do",
+          "[detector][quick]")
+{
+  const Scene cloth = cstreams::test::generated_scene("cloth-sphere", 30, 30);
+  runtime::Context tiny(filter_from_environment(), 4);
+  REQUIRE(tiny.work_group_size() == 4);
+  for (auto front : {FrontMode::none, FrontMode::exact}) {
+    INFO(to_string(front));
+    DetectorOptions options;
+    options.front = front;
+    CHECK(same(run_frames(cloth, options, 10, 14, nullptr, tiny), run_frames(cloth, options, 10, 14)));
+  }
+}
+
 TEST_CASE("contacts do not depend on the work-group size a device runs", "[detector][quick]")
 {
   // Devices differ in how many work-items a group may hold (rusticl on llvmpipe: 32);
