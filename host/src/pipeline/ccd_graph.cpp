@@ -162,6 +162,8 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
 
 namespace {
 
+constexpr const char* broad_phase_program = "ccd/broad_phase.cl";
+
 // Builds one scene's graph piece by piece; each step adds the streams and passes of
 // one stage of the pipeline and leaves those a scene does not need unset.
 struct GraphBuilder {
@@ -247,13 +249,8 @@ struct GraphBuilder {
   // down to triangle pairs and their decomposition into feature pairs.
   void broad_phase(std::size_t front_size, const GraphDevice& device)
   {
-    using namespace runtime;
     const std::size_t nf = t.faces.size();
-    const char* program = "ccd/broad_phase.cl";
     const bool keep_front = options.front != FrontMode::none;
-    // One build of the program serves both its passes, two where their registers are
-    // capped apart (GraphDevice).
-    const std::string front_option = "-DCS_KEEP_FRONT=" + std::to_string(int(keep_front));
     const std::size_t guess = sized(std::max<std::size_t>(1024, nf));
     s.face_edges = g.fixed("face edges", 12, nf);
     if (keep_front) {
@@ -269,9 +266,20 @@ struct GraphBuilder {
     g.within_run(s.triangle_pairs);  // only the decomposition reads them
     s.vf = g.variable("vf candidates", 8, guess);
     s.ee = g.variable("ee candidates", 8, guess);
-    // The orphan pairs' culls need no front: they go first, before the front update and
-    // what it emits take the device's memory. They emit what they keep in any order
-    // (orphans.cl).
+    orphan_culls();
+    // One build of the program serves both its passes, two where their registers are
+    // capped apart (GraphDevice).
+    const std::string front_option = "-DCS_KEEP_FRONT=" + std::to_string(int(keep_front));
+    front_update(keep_front, front_option, device);
+    decomposition(front_option, device);
+  }
+
+  // The orphan pairs' culls need no front: they go first, before the front update and
+  // what it emits take the device's memory. They emit what they keep in any order
+  // (orphans.cl).
+  void orphan_culls()
+  {
+    using namespace runtime;
     // Each returns its pass, where there are pairs, for the arguments of its kernel.
     auto cull_orphans = [&](const char* name, const char* kept_name, std::size_t count, const char* kernel,
                             StreamId& pairs, StreamId& kept) -> PassSpec* {
@@ -295,8 +303,13 @@ struct GraphBuilder {
     if (PassSpec* cull = cull_orphans("orphan ee", "orphan ee candidates", l.orphans.ee.size(), "cs_cull_edge_pairs",
                                       s.orphan_ee, s.kept_ee))
       cull->arg(buffer_of(s.edge_boxes));
+  }
+
+  void front_update(bool keep_front, const std::string& front_option, const GraphDevice& device)
+  {
+    using namespace runtime;
     auto& update = g.pass(keep_front ? "front update" : "search from seeds",
-                          {program, "cs_front_update", front_option + device.front_update_options})
+                          {broad_phase_program, "cs_front_update", front_option + device.front_update_options})
                        .launch_over(s.front)
                        .read(s.node_boxes)
                        .write(s.searches_cut);
@@ -315,15 +328,20 @@ struct GraphBuilder {
         .arg(buffer_of(s.faces))
         .arg(param_of(s.level_cap))
         .arg(buffer_of(s.searches_cut));
-    // A triangle pair gives 0.2-0.7 vertex-face and 0.6-1.7 edge-edge candidates on the
-    // five real steps: what sizes the segments of a first run. (Two of each, as before,
-    // set cloth-ball's run peak, at its first step: 201 MiB, where a settled step
-    // holds 192.)
-    // On the H200 the decomposition takes 72 registers a work-item: seven groups of 128
-    // fit on a compute unit where three of 256 do, 896 work-items against 768, and its
-    // scattered reads wait less. A CPU runs a group's work-items one after another and
-    // keeps the context's groups.
-    g.pass("decompose", {program, "cs_decompose", front_option + device.decompose_options})
+  }
+
+  // A triangle pair gives 0.2-0.7 vertex-face and 0.6-1.7 edge-edge candidates on the
+  // five real steps: what sizes the segments of a first run. (Two of each, as before,
+  // set cloth-ball's run peak, at its first step: 201 MiB, where a settled step
+  // holds 192.)
+  // On the H200 the decomposition takes 72 registers a work-item: seven groups of 128
+  // fit on a compute unit where three of 256 do, 896 work-items against 768, and its
+  // scattered reads wait less. A CPU runs a group's work-items one after another and
+  // keeps the context's groups.
+  void decomposition(const std::string& front_option, const GraphDevice& device)
+  {
+    using namespace runtime;
+    g.pass("decompose", {broad_phase_program, "cs_decompose", front_option + device.decompose_options})
         .launch_over(s.triangle_pairs)
         .work_group(device.cpu ? 0 : 128)
         .emit(s.vf, 1)

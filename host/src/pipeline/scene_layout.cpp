@@ -45,11 +45,9 @@ std::vector<std::uint32_t> node_depths(const Bvh& bvh)
   return depth;
 }
 
-}  // namespace
-
-SceneLayout make_layout(const SceneDescription& scene, double separation)
+// Every object valid, names unique, ignored pairs naming objects that exist.
+void check_scene(const SceneDescription& scene)
 {
-  SceneLayout l;
   const auto n = std::uint32_t(scene.objects.size());
   for (std::uint32_t o = 0; o < n; ++o) {
     check_object(scene.objects[o]);
@@ -59,10 +57,16 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
   }
   for (const auto& [a, b] : scene.ignored_pairs)
     if (a >= n || b >= n) throw InputError("an ignored pair names object " + std::to_string(std::max(a, b)) + " of " + std::to_string(n));
+}
 
+// Each object's topology, and its tree over its starting positions, within what the
+// device's node words and the traversal's stack can hold.
+std::vector<Topology> build_trees(const SceneDescription& scene, double separation, SceneLayout& l)
+{
+  const std::size_t n = scene.objects.size();
   std::vector<Topology> topologies(n);
   l.trees.resize(n);
-  for (std::uint32_t o = 0; o < n; ++o) {
+  for (std::size_t o = 0; o < n; ++o) {
     const ObjectDescription& d = scene.objects[o];
     topologies[o] = build_topology(d.faces, d.positions.size());
     l.trees[o] = build_bvh(swept_bounds(topologies[o], d.positions, d.positions, separation).faces);
@@ -76,8 +80,13 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
   if (nodes >= max_scene_nodes)
     throw InputError("the scene's BVHs have " + std::to_string(nodes) + " nodes, more than the " +
                      std::to_string(max_scene_nodes - 1) + " a face's word on the device can name");
+  return topologies;
+}
 
-  // Slots: moving objects, then static ones.
+// Slots: moving objects, then static ones, each at the end of the one before.
+void place_slots(const SceneDescription& scene, const std::vector<Topology>& topologies, SceneLayout& l)
+{
+  const auto n = std::uint32_t(scene.objects.size());
   for (int pass = 0; pass < 2; ++pass)
     for (std::uint32_t o = 0; o < n; ++o) {
       const ObjectDescription& d = scene.objects[o];
@@ -98,9 +107,12 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
     }
   l.slot_of.resize(n);
   for (std::uint32_t i = 0; i < l.slots.size(); ++i) l.slot_of[l.slots[i].object] = i;
+}
 
-  // The forest: moving trees interleaved level by level, then static trees whole.
-  std::vector<std::vector<std::int32_t>> global(n);
+// The forest: moving trees interleaved level by level, then static trees whole.
+void lay_out_forest(SceneLayout& l)
+{
+  std::vector<std::vector<std::int32_t>> global(l.trees.size());
   std::int32_t next = 0;
   for (std::size_t d = 0;; ++d) {
     bool any = false;
@@ -140,9 +152,12 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
                                     node.parent < 0 ? -1 : g[std::size_t(node.parent)], std::int32_t(depth[i])};
     }
   }
+}
 
-  // Global topology: concatenating the objects' meshes keeps each one's edge order and
-  // feature ownership, so the union's topology is theirs at offsets.
+// Global topology: concatenating the objects' meshes keeps each one's edge order and
+// feature ownership, so the union's topology is theirs at offsets.
+void join_topologies(const std::vector<Topology>& topologies, SceneLayout& l)
+{
   std::vector<Face> faces;
   for (const ObjectSlot& s : l.slots) {
     const Topology& t = topologies[s.object];
@@ -160,7 +175,18 @@ SceneLayout make_layout(const SceneDescription& scene, double separation)
     }
   }
   l.topology = build_topology(faces, l.vertex_object.size());
+}
 
+}  // namespace
+
+SceneLayout make_layout(const SceneDescription& scene, double separation)
+{
+  check_scene(scene);
+  SceneLayout l;
+  const std::vector<Topology> topologies = build_trees(scene, separation, l);
+  place_slots(scene, topologies, l);
+  lay_out_forest(l);
+  join_topologies(topologies, l);
   for (std::size_t i = 0; i < l.slots.size(); ++i)
     for (std::size_t j = i; j < l.slots.size(); ++j)
       if (scene.may_collide(l.slots[i].object, l.slots[j].object)) l.seeds.push_back({l.slots[i].root, l.slots[j].root});
