@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -90,26 +91,15 @@ void print_difference(const ContactKey& key, const std::vector<std::optional<dou
   std::printf("\n");
 }
 
-void compare(const CompareOptions& o)
+using Differences = std::map<ContactKey, std::vector<std::optional<double>>>;
+using TruthOf = std::function<std::optional<StepTruth::Answer>(const ContactKey&)>;
+
+// The scene, the devices, each pass's median side by side with the ratios to the first
+// device, and the contacts that differ (the first 20).
+void print_comparison(const CompareOptions& o, const Scene& scene, std::size_t first, std::size_t last,
+                      std::vector<Measurement>& runs, const Differences& differing, bool with_truth,
+                      const TruthOf& truth_of)
 {
-  const auto source = scene_source(o);
-  const Scene& scene = source->scene;
-  const auto [first, last] = resolve(parse_step_range(o.frames), scene.frame_count());
-
-  std::vector<Measurement> runs;
-  for (const auto& filter : o.devices) {
-    runtime::Context context(filter);
-    runs.push_back(measure(o, scene, first, last, context));
-  }
-  const auto differing = differences(runs, first);
-  // Ground truth where the scene is the one object of a real step's two frames.
-  std::optional<StepTruth> truth;
-  if (scene.objects.size() == 1 && first == 0 && last == 1 && !differing.empty())
-    truth = StepTruth::for_frames(o.paths);
-  auto truth_of = [&](const ContactKey& key) {
-    return truth ? truth->of(contact_of(key)) : std::optional<StepTruth::Answer>{};
-  };
-
   std::printf("scene     %s: %zu objects, %zu faces; %zu steps (frames %zu to %zu)\n", scene.name.c_str(),
               scene.objects.size(), scene.face_count(), last - first, first, last);
   std::printf("solver    %s, %s precision, tolerance %g; front %s; medians of %u run(s) a step\n", o.solver.c_str(),
@@ -135,20 +125,24 @@ void compare(const CompareOptions& o)
   print_row("contacts", across([](Measurement& r) { return double(r.contacts.size()); }), " %12.0f");
   if (differing.empty()) {
     std::printf("\ncontacts  identical on every device\n");
-  } else {
-    std::printf("\ncontacts  %zu differ (time of impact per device, \"none\" where it reports none%s):\n",
-                differing.size(), truth ? "; the step's ground truth below each" : "");
-    std::size_t shown = 0;
-    for (const auto& [key, times] : differing) {
-      if (++shown > 20) {
-        std::printf("  ... and %zu more (all in --json)\n", differing.size() - 20);
-        break;
-      }
-      print_difference(key, times, truth_of(key));
-    }
+    return;
   }
+  std::printf("\ncontacts  %zu differ (time of impact per device, \"none\" where it reports none%s):\n",
+              differing.size(), with_truth ? "; the step's ground truth below each" : "");
+  std::size_t shown = 0;
+  for (const auto& [key, times] : differing) {
+    if (++shown > 20) {
+      std::printf("  ... and %zu more (all in --json)\n", differing.size() - 20);
+      break;
+    }
+    print_difference(key, times, truth_of(key));
+  }
+}
 
-  if (o.json.empty() && o.plot.empty()) return;
+// Every device's figures and every contact that differs, with the step's truth.
+nlohmann::json comparison_json(const CompareOptions& o, const Scene& scene, std::size_t first, std::size_t last,
+                               std::vector<Measurement>& runs, const Differences& differing, const TruthOf& truth_of)
+{
   nlohmann::json out{{"scene", scene.name},     {"solver", o.solver}, {"precision", o.precision},
                      {"tolerance", o.tolerance}, {"front", o.front},   {"first_frame", first},
                      {"last_frame", last},       {"repeat", o.repeat}, {"identical", differing.empty()},
@@ -188,6 +182,31 @@ void compare(const CompareOptions& o)
                                   {"truth", truth_json},
                                   {"verdicts", verdicts}});
   }
+  return out;
+}
+
+void compare(const CompareOptions& o)
+{
+  const auto source = scene_source(o);
+  const Scene& scene = source->scene;
+  const auto [first, last] = resolve(parse_step_range(o.frames), scene.frame_count());
+
+  std::vector<Measurement> runs;
+  for (const auto& filter : o.devices) {
+    runtime::Context context(filter);
+    runs.push_back(measure(o, scene, first, last, context));
+  }
+  const Differences differing = differences(runs, first);
+  // Ground truth where the scene is the one object of a real step's two frames.
+  std::optional<StepTruth> truth;
+  if (scene.objects.size() == 1 && first == 0 && last == 1 && !differing.empty())
+    truth = StepTruth::for_frames(o.paths);
+  const TruthOf truth_of = [&](const ContactKey& key) {
+    return truth ? truth->of(contact_of(key)) : std::optional<StepTruth::Answer>{};
+  };
+  print_comparison(o, scene, first, last, runs, differing, bool(truth), truth_of);
+  if (o.json.empty() && o.plot.empty()) return;
+  const nlohmann::json out = comparison_json(o, scene, first, last, runs, differing, truth_of);
   if (!o.json.empty()) write_file_atomically(o.json, [&](std::ostream& f) { f << out.dump(1) << "\n"; });
   if (!o.plot.empty()) draw_plot(cstreams_plot_compare_script, out, o.plot);
 }
