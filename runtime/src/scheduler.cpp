@@ -1168,16 +1168,17 @@ struct Scheduler::State {
   // it outgrows this one as much: a sequence whose front grew a fifth a step (the
   // 1.5M-triangle sheet) had run its front update twice in most steps while the pool
   // grew fourfold a step. Up to half of what it emitted, so that after a burst (a step
-  // where contact surges) the next step's pool holds no more than that step emitted. Not an
-  // unplanned execution's (a first step's, searched from the roots: cloth-ball's next
-  // steps then peaked 11% above a settled one), nor a rerun's, planned from its own counts.
+  // where contact surges) the next step's pool holds no more than that step emitted.
+  // Not an unplanned execution's (a first step's, searched from the roots: cloth-ball's
+  // next steps then peaked 11% above a settled one), nor a rerun's, planned from its
+  // own counts.
   void adopt_plan(EmitterState& e)
   {
-    if (e.planned > 0 && !e.exact_plan)
-      e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], host_counters[state(e.stream).slot] / 2);
+    const std::size_t emitted = host_counters[state(e.stream).slot];
+    if (e.planned > 0 && !e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], emitted / 2);
     std::swap(e.plan, e.offsets);
     e.planned = e.segments;
-    e.planned_total = host_counters[state(e.stream).slot];
+    e.planned_total = emitted;
     e.fresh = 0;
     e.exact_plan = false;
   }
