@@ -3,7 +3,10 @@
 #include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
+#include <cstreams/runtime/details/segment_plan.hpp>
 
+#include "scheduler/growth.hpp"
+#include "scheduler/work_list.hpp"
 #include "step_arena.hpp"
 
 #include <algorithm>
@@ -45,9 +48,13 @@ struct StreamState {
   bool spent = false;  // within a run only (StreamGraph::within_run), and gone back this run
 };
 
-struct EmitterState {
+using details::SegmentPlanner;
+using details::SegmentSizes;
+
+// An emitted stream of a pass: its registration segments' sizes (SegmentSizes, which
+// SegmentPlanner plans) and buffers.
+struct EmitterState : SegmentSizes {
   StreamId stream;
-  double expected = 0;   // items a work-item, before a run has planned the segments (PassSpec::expected_items)
   StreamId handed_from;  // the input whose buffer the stream takes (PassSpec::hand_over), if any
   Buffer items;   // registration segments, from the step arena or the idle ones; held until the stage's counters are read
   std::size_t arena_at = StepArena::none;
@@ -55,27 +62,12 @@ struct EmitterState {
   std::size_t segment_bytes = 0;  // of the segments this run's execution held
   Buffer counts;  // one count per segment
   std::size_t counts_at = StepArena::none;
-  std::size_t segments = 0;
-  std::size_t segment_capacity = 0;  // lock-free: items a work-item's segment holds
-  std::size_t group = 0;             // work-items a group of the pass's launches
   std::uint32_t overflow_slot = no_slot;
   // Segmented lock: this execution's segment offsets (the prefix sum of its counts,
   // then their total), and the last execution's, which plan this one's segments.
   Buffer offsets, plan;
-  std::size_t planned = 0;        // segments the plan covers; 0: none yet
-  std::size_t planned_total = 0;  // items they emitted
-  // Segmented lock, where no plan fits: what a group may hold at most, from a forgotten
-  // plan's total spread over this run's groups (0: no such total).
-  std::size_t fresh = 0;
-  // Segmented lock: the items the spill pool of this execution holds; what the last
-  // execution planned from another run's counts spilled (adopt_plan); and whether this
-  // execution's plan is its own input's counts (a rerun).
-  std::size_t pool = 0, spilled = 0;
-  bool exact_plan = false;
 };
 
-// Segmented lock: the spill pool's items per group that the last run did not plan.
-constexpr std::uint64_t spill_per_group = 16;
 // Segments of an output packed late up to which its merge adds up the counts before each
 // group's segments itself (a few loads a work-item) rather than after a scan's launch.
 constexpr std::size_t own_offsets_most_segments = 8192;
@@ -83,53 +75,6 @@ constexpr std::size_t own_offsets_most_segments = 8192;
 // Segmented lock: the most segments one group of the merge copies (CS_MERGE_SEGMENTS
 // in cl_kernels/runtime/compact.cl).
 constexpr std::size_t most_merged_per_group = 64;
-
-// A work list's device side (Worklist in stream_graph.hpp).
-constexpr std::size_t list_words = 13;
-constexpr std::size_t list_count_bytes = list_words * sizeof(std::uint32_t);
-
-// Work lists and list states this small stay, however little a run needs: giving them
-// back would save nothing worth an allocation when the next run needs them again.
-constexpr std::size_t kept_list_bytes = std::size_t(1) << 16;
-
-struct ListState {
-  Kernel seed, round;
-  Buffer state;
-  Buffer lists[2];  // ping-pong: round r reads lists[r % 2] and appends to the other
-  // cl_kernels/runtime/worklist.h's counts[list_words]: words of the scheduler's
-  // counters from `counts_at`, so that they start a run cleared with them, with nothing
-  // written before the seed, and come back with the stage's counter read rather than in
-  // a read of their own (the two cost an H200 ~20 us a conservative step). `counts`
-  // views them in `counters`, `next_counts` in `next_counters`, and they swap with them.
-  std::size_t counts_at = 0;
-  Buffer counts, next_counts;
-  bool counts_clear = false;  // the counts hold zeros: a seed may start
-  std::size_t capacity = 0;
-  std::size_t released = 0;  // the capacity the lists had when memory pressure took them
-  // The rounds the last runs needed, the next run's first batch the most of them: a run
-  // that needs more than its first batch has its pass emit twice (refine()), and the
-  // rounds of steps in a row go up and down by one or two (300 bodies: 13-17), where an
-  // empty round costs a few microseconds. Past them, the batches start at two rounds.
-  std::array<unsigned, 8> recent_rounds{};
-  unsigned runs_settled = 0;
-  bool settled = false;  // this run's rounds are done, or their last batch is (awaiting)
-  // Where this run's rounds stand: the next batch, and whether they start from the seed.
-  bool reseed = true;
-  unsigned at_round = 0, batch = 0, next_batch = 0;
-  // Where `awaiting`, the stage's counter read brings the counts after the last batch
-  // (refine()).
-  bool awaiting = false;
-  void restart()
-  {
-    settled = awaiting = false;
-    reseed = true;
-  }
-  // After a batch, as its counts say: its last round left nothing and none overflowed.
-  bool batch_finished(const std::uint32_t* counts) const
-  {
-    return counts[3] <= capacity && counts[at_round % 3] == 0;
-  }
-};
 
 struct PassState {
   const PassSpec* spec = nullptr;
@@ -154,9 +99,6 @@ struct PassState {
   PassStats stats;
 };
 
-// Slack on growth, so that a count that creeps up frame by frame does not rerun each time.
-std::size_t grown(std::size_t needed) { return needed + needed / 8 + 16; }
-
 // The smallest of `items` that holds `need` bytes (`bytes_of` an item), or end(): the
 // one rule by which passes take idle segments and by which the scheduler works out which
 // of them to keep.
@@ -177,7 +119,7 @@ std::string registration_define(Registration r)
 
 struct Scheduler::State {
   State(Context& c, StreamGraph g, SchedulerOptions o)
-      : context(c), graph(std::move(g)), options(o), scan(c),
+      : context(c), graph(std::move(g)), options(o), planner(o.registration, c.work_group_size()), scan(c),
         merge_interleaved(c.programs().kernel("runtime/compact.cl", "cs_merge_interleaved")),
         merge_planned(c.programs().kernel("runtime/compact.cl", "cs_merge_planned")),
         no_plan(c, sizeof(cl_uint), "registration plan"), arena(c)
@@ -187,6 +129,7 @@ struct Scheduler::State {
   Context& context;
   StreamGraph graph;
   SchedulerOptions options;
+  SegmentPlanner planner;
   Scan scan;
   Kernel merge_interleaved, merge_planned;
   Buffer offsets;  // lock-free segments' offsets
@@ -607,7 +550,7 @@ struct Scheduler::State {
       } else if (p.mode == Registration::segmented_lock) {
         k.set_arg(index++, e.items);
         k.set_arg(index++, e.counts);
-        k.set_arg(index++, cl_uint(first_segment_capacity(e)));
+        k.set_arg(index++, cl_uint(planner.first_segment_capacity(e)));
         k.set_arg(index++, counters);
         k.set_arg(index++, cl_uint(e.overflow_slot));
         k.set_arg(index++, plan_of(e));
@@ -628,43 +571,7 @@ struct Scheduler::State {
     if (p.spec->culls()) k.set_arg(index++, p.keep);
   }
 
-  std::size_t first_segment_capacity(const EmitterState& e) const
-  {
-    const bool per_group = options.registration == Registration::segmented_lock;
-    const std::size_t expected =
-        std::max<std::size_t>(1, std::size_t(std::ceil(e.expected * double(per_group ? e.group : 1))));
-    return per_group && e.fresh > 0 ? std::min(expected, e.fresh) : expected;
-  }
-
   const Buffer& plan_of(const EmitterState& e) const { return e.planned ? e.plan : no_plan; }
-
-  // Items the segments of `segments` groups hold: the lock-free ones each hold as much
-  // as the busiest of the last run; segmented-lock ones follow the last run's plan
-  // (cs_segment_base at `segments`, bounded by the plan's total), then the spill pool.
-  std::uint64_t segment_items(const EmitterState& e, std::size_t segments) const
-  {
-    if (segments == 0) return 0;
-    if (options.registration == Registration::lock_free) return std::uint64_t(segments) * e.segment_capacity;
-    const std::uint64_t planned = std::min(segments, e.planned), total = e.planned_total;
-    return total + total / 8 + (segments - planned) * first_segment_capacity(e) + spill_pool_items(e, segments);
-  }
-
-  // A planned group spills only what it emits beyond its last run's and an eighth: the
-  // pool holds twice what the last run spilled (adopt_plan), and an item a group or one
-  // group's burst of 16 items a work-item, whichever is more (16 a group took 9 MiB of
-  // n-body's step at its peak, and none spilled). A rerun, planned from its own input,
-  // spills nothing. A group the plan lacks gets 16 items where it has the context's
-  // size, and as many fewer as it has fewer work-items: the decomposition's first run
-  // in groups of 128 held 9 MiB more on n-body at 16 a group, with each spilled item's
-  // two words of place.
-  std::uint64_t spill_pool_items(const EmitterState& e, std::size_t segments) const
-  {
-    const std::uint64_t planned = std::min(segments, e.planned), spilled = e.exact_plan ? 0 : e.spilled;
-    const std::uint64_t least =
-        planned > 0 ? std::max<std::uint64_t>(planned, spill_per_group * e.group) : 0;
-    const std::uint64_t unplanned = std::max<std::uint64_t>(1, spill_per_group * e.group / context.work_group_size());
-    return std::max(least, 2 * spilled) + (segments - planned) * unplanned;
-  }
 
   // Segments follow the last run, so one burst (a first step searched from the roots,
   // say) can ask for more memory than the device has, or than is left of it. Then the
@@ -672,16 +579,11 @@ struct Scheduler::State {
   // contention, but its memory is the stream itself.
   bool segments_fit(const EmitterState& e, std::size_t global) const
   {
-    const std::uint64_t items = segment_items(e, segment_count(e, global));
+    const std::uint64_t items = planner.segment_items(e, planner.segment_count(e, global));
     if (items > 0xffffffffu) return false;  // the kernels index segments with 32 bits
     const std::size_t bytes = std::size_t(items) * spec(e.stream).element_bytes;
     const std::size_t in_use = context.memory_in_use(), limit = context.memory_limit();
     return bytes <= context.device().max_allocation && in_use <= limit && bytes <= limit - in_use;
-  }
-
-  std::size_t segment_count(const EmitterState& e, std::size_t global) const
-  {
-    return options.registration == Registration::segmented_lock ? global / e.group : global;
   }
 
   std::size_t group_of(const PassSpec& spec) const
@@ -709,9 +611,8 @@ struct Scheduler::State {
 
   void prepare_segments(EmitterState& e, std::size_t global)
   {
-    e.segments = segment_count(e, global);
-    e.pool = options.registration == Registration::segmented_lock ? std::size_t(spill_pool_items(e, e.segments)) : 0;
-    const std::size_t bytes = std::size_t(segment_items(e, e.segments)) * spec(e.stream).element_bytes;
+    planner.prepare(e, global);
+    const std::size_t bytes = std::size_t(planner.segment_items(e, e.segments)) * spec(e.stream).element_bytes;
     // Segments still held from this run's overflowing execution are written anew: kept
     // while they fit.
     if (e.items.bytes() < bytes) give_back_segments(e);
@@ -722,178 +623,17 @@ struct Scheduler::State {
     take_stage_scratch(e.counts, e.counts_at, (e.segments + 2 * e.pool) * sizeof(cl_uint), "registration counts");
   }
 
-  void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes)
+  // What a pass's work list borrows from the scheduler while its rounds run.
+  ListHost list_host(const PassState& p)
   {
-    // The old memory goes back before more is taken; a failed allocation leaves no
-    // capacity that the buffers do not have.
-    l.capacity = 0;
-    for (auto& list : l.lists) list = Buffer();
-    for (auto& list : l.lists)
-      with_memory([&] { list = Buffer(context, std::max<std::size_t>(items, 1) * item_bytes, "work list"); });
-    l.capacity = items;
-  }
-
-  // Grows the lists to `items`, keeping the first `kept` items of lists[keep]: the input
-  // of a round that overflowed. The other list goes back first and the kept one once
-  // copied, so no more is held at once than two lists of the new size.
-  void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigned keep, std::size_t kept)
-  {
-    Buffer input = std::move(l.lists[keep]);
-    l.capacity = 0;
-    l.lists[0] = l.lists[1] = Buffer();
-    with_memory([&] { l.lists[keep] = Buffer(context, items * item_bytes, "work list"); });
-    context.copy(input, l.lists[keep], kept * item_bytes, 0, 0, tl());
-    input = Buffer();
-    with_memory([&] { l.lists[1 - keep] = Buffer(context, items * item_bytes, "work list"); });
-    l.capacity = items;
-  }
-
-  // After a run's rounds (or a slice's, `widest` the most any round of the run held so
-  // far): lists more than twice what it needed (a burst that has passed) go back, and
-  // the next run takes lists of that size, so that a detector held for many steps holds
-  // what its steps need. Lists grow to no more than twice what their run needed, so a
-  // run like the last keeps them.
-  void keep_needed_lists(ListState& l, std::size_t widest, std::size_t item_bytes)
-  {
-    const std::size_t needed = grown(widest);
-    if (l.capacity <= 2 * needed || l.capacity * item_bytes <= kept_list_bytes) return;
-    l.lists[0] = l.lists[1] = Buffer();
-    l.capacity = 0;
-    l.released = needed;
-  }
-
-  // Seeds the work list and runs its rounds until one leaves nothing, in batches
-  // between which the host reads the counts once. A round that overflows the lists runs
-  // again, as a replay (cl_kernels/runtime/worklist.h), once they have grown to what it
-  // asked for with its input kept; a seed that overflows starts again.
-  // The pass emits from the state as it stands after a batch, and the stage's counter
-  // read brings the counts with it (flush, settle_list), which saves a round trip where
-  // the batch was the last; where it was not, the rounds go on from there and the pass
-  // emits again. On a device that ends loops early, each round goes over exactly its
-  // items, one a work-item, so that no work-item strides over many: the host waits for
-  // the counts after every round (such devices are CPUs, where a read costs little).
-  void refine(PassState& p, std::size_t n)
-  {
-    const Worklist& w = *p.spec->worklist;
-    ListState& l = *p.list;
-    const std::string& label = p.spec->name;
-    const std::size_t wg = context.work_group_size();
-    const std::size_t round_group = w.round_group ? std::min(w.round_group, wg) : wg;
-    const bool bounded_loops = context.loop_trip_limit() != 0;
-    // The last batch's counts, brought by the stage's counter read: the rounds go on.
-    if (l.awaiting && settle_list(p)) return;
-    if (l.reseed) {
-      const std::size_t state_bytes =
-          w.state_bytes + (w.extra_state_bytes > 0 && nonzero(w.extra_state_while) ? w.extra_state_bytes : 0);
-      const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
-      // A state far larger than this run's goes back too (keep_needed_lists).
-      if (l.state.bytes() > 2 * state_needed + kept_list_bytes) l.state = Buffer();
-      with_memory([&] { ensure_capacity(context, l.state, state_needed, "work list state"); });
-      if (n == 0) {
-        keep_needed_lists(l, 0, w.item_bytes);
-        return;
-      }
-      // Lists taken by memory pressure come back at their size, not at one that the
-      // rounds would overflow again.
-      if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes);
-      l.released = 0;
-    }
-    std::uint32_t* const counts = counts_read(l);
-    do {
-      if (l.reseed) {
-        l.reseed = false;
-        // The seed sets its counts up from zeros (worklist.h); those of a run's first
-        // seed were cleared with the run's counters.
-        if (!l.counts_clear) context.fill_u32(counters, 0, l.counts_at, list_words, tl());
-        l.counts_clear = false;
-        unsigned a = bind_own_args(*p.spec, l.seed);
-        l.seed.set_arg(a++, l.state);
-        l.seed.set_arg(a++, l.lists[0]);
-        l.seed.set_arg(a++, l.counts);
-        l.seed.set_arg(a++, cl_uint(l.capacity));
-        context.launch(l.seed, round_up(n, round_group), round_group, tl(), label);
-        ++p.stats.launches;
-        // Rounds launched over exactly their items must know the seed's.
-        if (bounded_loops) {
-          context.read(l.counts, counts, list_count_bytes, 0, tl());
-          ++stats.readbacks;
-        }
-        l.at_round = 0;
-        l.batch = bounded_loops ? 1 : std::max(*std::max_element(l.recent_rounds.begin(), l.recent_rounds.end()), 1u);
-        l.next_batch = l.runs_settled ? 2 : 8;
-      }
-      for (const unsigned last = l.at_round + l.batch; l.at_round < last; ++l.at_round) {
-        const unsigned round = l.at_round;
-        unsigned r = bind_own_args(*p.spec, l.round);
-        l.round.set_arg(r++, l.state);
-        l.round.set_arg(r++, l.lists[round % 2]);
-        l.round.set_arg(r++, l.lists[(round + 1) % 2]);
-        l.round.set_arg(r++, l.counts);
-        l.round.set_arg(r++, cl_uint(round));
-        l.round.set_arg(r++, cl_uint(l.capacity));
-        const std::size_t items = bounded_loops ? std::min<std::size_t>(counts[round % 3], l.capacity) : w.round_items;
-        context.launch(l.round, round_up(items, round_group), round_group, tl(), label);
-        ++p.stats.launches;
-      }
-      if (!bounded_loops) {
-        l.awaiting = true;
-        return;
-      }
-      context.read(l.counts, counts, list_count_bytes, 0, tl());
-      ++stats.readbacks;
-    } while (!settle_list(p));
-  }
-
-  // Once the counts after a batch of rounds are read: whether the rounds are done, their
-  // statistics taken. Otherwise the next batch is planned, from a list grown where a
-  // round overflowed it (replayed) or from the seed where the seed did.
-  bool settle_list(PassState& p)
-  {
-    const Worklist& w = *p.spec->worklist;
-    ListState& l = *p.list;
-    const std::string& label = p.spec->name;
-    std::uint32_t* const counts = counts_read(l);
-    l.awaiting = false;
-    // A search deeper than this is a kernel that never settles, not work.
-    constexpr unsigned most_rounds = 1u << 20;
-    if (counts[8])
-      throw Error("pass " + label + ": device " + context.device().name + " ended a round's loops early, after " +
-                  std::to_string(context.loop_trip_limit()) + " trips; its results would be incomplete");
-    if (l.batch_finished(counts)) {
-      l.recent_rounds[l.runs_settled++ % l.recent_rounds.size()] = counts[7];
-      p.stats.rounds += counts[7];
-      p.stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
-      p.stats.widest_list = std::max<std::size_t>(p.stats.widest_list, counts[6]);
-      keep_needed_lists(l, p.stats.widest_list, w.item_bytes);
-      l.reseed = true;
-      return true;
-    }
-    if (counts[3] <= l.capacity) {
-      if (l.at_round >= most_rounds)
-        throw Error("pass " + label + ": its work list still holds " + std::to_string(counts[l.at_round % 3]) +
-                    " items after " + std::to_string(l.at_round) + " rounds");
-      if (context.loop_trip_limit() == 0) {
-        l.batch = l.next_batch;
-        l.next_batch *= 2;
-      }
-      return false;
-    }
-    ++p.stats.reruns;
-    const std::size_t needed = std::max(grown(counts[3]), 2 * l.capacity);
-    // Rounds after the one that overflowed did nothing; where no round ran, the seed's
-    // own first items overflowed.
-    if (counts[7] == 0) {
-      allocate_lists(l, needed, w.item_bytes);
-      l.reseed = true;
-      return false;
-    }
-    const unsigned round = l.at_round = counts[7] - 1;
-    grow_lists(l, needed, w.item_bytes, round % 2, counts[round % 3]);
-    counts[(round + 1) % 3] = counts[3] = counts[10] = 0;
-    counts[11] = round + 1;
-    for (const std::size_t word : {std::size_t((round + 1) % 3), std::size_t(3), std::size_t(10), std::size_t(11)})
-      context.fill_u32(l.counts, counts[word], word, 1, tl());
-    return false;
+    return ListHost{context,
+                    tl(),
+                    counters,
+                    counts_read(*p.list),
+                    [this](const std::function<void()>& allocate) { with_memory(allocate); },
+                    [this, &p](const Kernel& k) { return bind_own_args(*p.spec, k); },
+                    p.spec->worklist->extra_state_bytes > 0 && nonzero(p.spec->worklist->extra_state_while),
+                    stats.readbacks};
   }
 
   void execute(PassState& p, Redo redo)
@@ -909,7 +649,8 @@ struct Scheduler::State {
     const std::size_t global = round_up(n, wg);
     const std::string& label = p.spec->name;
     if (p.list && !p.list->settled) {
-      refine(p, n);
+      ListHost host = list_host(p);
+      refine(*p.spec, *p.list, p.stats, n, host);
       p.list->settled = true;
     }
     if (redo == Redo::full) {
@@ -922,8 +663,8 @@ struct Scheduler::State {
         if (e.handed_from == StreamId{} && !(late && state(e.stream).transient)) restore(e.stream);
       if (p.spec->culls()) restore(p.spec->cull_target);
       for (auto& e : p.emitters) {
-        if (e.segment_capacity == 0) e.segment_capacity = first_segment_capacity(e);
-        forget_stale_plan(e, segment_count(e, global));
+        if (e.segment_capacity == 0) e.segment_capacity = planner.first_segment_capacity(e);
+        SegmentPlanner::forget_stale_plan(e, planner.segment_count(e, global));
         if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
             !(release_idle_scratch() && segments_fit(e, global)))
           fall_back_to_global_counter(p);
@@ -938,7 +679,7 @@ struct Scheduler::State {
       }
       // Lock-free: the next run tries small segments again.
       if (p.mode == Registration::global_atomic)
-        for (auto& e : p.emitters) e.segment_capacity = first_segment_capacity(e);
+        for (auto& e : p.emitters) e.segment_capacity = planner.first_segment_capacity(e);
       // Outputs the segments left to the global counter come back now; those that pack
       // late get their buffer once packed.
       for (auto& e : p.emitters) {
@@ -1005,7 +746,7 @@ struct Scheduler::State {
     if (!scanned && !own_offsets)
       scan.exclusive(e.counts, e.offsets, e.segments, counters, no_slot, tl(), p.spec->name.c_str());
     merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
-                           cl_uint(e.planned), cl_uint(first_segment_capacity(e)), counters,
+                           cl_uint(e.planned), cl_uint(planner.first_segment_capacity(e)), counters,
                            cl_uint(e.overflow_slot), cl_uint(e.pool), dst.buffer, cl_uint(copy ? dst.capacity : 0),
                            cl_uint(per_group), cl_uint(own_offsets));
     const std::size_t groups = (e.segments + per_group - 1) / per_group;
@@ -1019,7 +760,7 @@ struct Scheduler::State {
   std::size_t merged_per_group(const EmitterState& e) const
   {
     const std::size_t wg = context.work_group_size(), most = std::min(most_merged_per_group, wg);
-    const std::size_t average = e.planned ? e.planned_total / e.planned : first_segment_capacity(e);
+    const std::size_t average = e.planned ? e.planned_total / e.planned : planner.first_segment_capacity(e);
     return std::clamp<std::size_t>(8 * wg / std::max<std::size_t>(average, 1), 1, most);
   }
 
@@ -1142,45 +883,14 @@ struct Scheduler::State {
   // all fit its segment.
   bool segments_overflowed(const PassState& p, const EmitterState& e) const
   {
-    if (p.mode == Registration::segmented_lock) return host_counters[e.overflow_slot] > e.pool;
-    return p.mode == Registration::lock_free && host_counters[e.overflow_slot] > e.segment_capacity;
+    return planner.overflowed(p.mode, e, host_counters[e.overflow_slot]);
   }
 
-  // A plan from a run with many more or fewer groups (the burst of a first step searched
-  // from the roots, say) says nothing about this one's groups: they start afresh. Its
-  // total still says how much the pass emits where its input is the last run's output
-  // (the second step's front update, over the front the first step's search found), so
-  // no group starts with more than that total spread evenly, and an eighth more: cloth-
-  // ball's second step held 112 MB of segments sized by the expected items, 80 MB in
-  // later steps. Where the pass runs in slices, the expected items are fewer.
-  static void forget_stale_plan(EmitterState& e, std::size_t segments)
-  {
-    if (!(segments + e.planned / 8 < e.planned || segments > e.planned + e.planned / 8)) return;
-    const std::size_t total = e.planned_total + e.planned_total / 8;
-    if (total > 0 && segments > 0) e.fresh = (total + segments - 1) / segments;
-    e.planned = e.planned_total = 0;
-  }
-
-  // Segmented lock: this execution's counts plan the next one's segments, and where its
-  // own were planned from the run before, what it spilled sizes the next pool: how much
-  // a step outgrows the one before, or how far its groups' work moved. The count goes on
-  // past the pool, so a pool that overflowed takes at once what the next step needs if
-  // it outgrows this one as much: a sequence whose front grew a fifth a step (the
-  // 1.5M-triangle sheet) had run its front update twice in most steps while the pool
-  // grew fourfold a step. Up to half of what it emitted, so that after a burst (a step
-  // where contact surges) the next step's pool holds no more than that step emitted.
-  // Not an unplanned execution's (a first step's, searched from the roots: cloth-ball's
-  // next steps then peaked 11% above a settled one), nor a rerun's, planned from its
-  // own counts.
+  // Segmented lock: this execution's counts plan the next one's segments.
   void adopt_plan(EmitterState& e)
   {
-    const std::size_t emitted = host_counters[state(e.stream).slot];
-    if (e.planned > 0 && !e.exact_plan) e.spilled = std::min<std::size_t>(host_counters[e.overflow_slot], emitted / 2);
+    SegmentPlanner::adopt(e, host_counters[state(e.stream).slot], host_counters[e.overflow_slot]);
     std::swap(e.plan, e.offsets);
-    e.planned = e.segments;
-    e.planned_total = emitted;
-    e.fresh = 0;
-    e.exact_plan = false;
   }
 
   // After the stage's counters are read: whether the emitter's items outgrew its stream
@@ -1253,7 +963,10 @@ struct Scheduler::State {
       // on (refine), and the pass emits again.
       for (PassState* p : stage)
         if (p->list && p->list->awaiting) {
-          if (p->list->batch_finished(counts_read(*p->list))) settle_list(*p);
+          if (p->list->batch_finished(counts_read(*p->list))) {
+            ListHost host = list_host(*p);
+            settle_list(*p->spec, *p->list, p->stats, host);
+          }
           else p->list->settled = false;
         }
       // A pass whose outputs all fit is done: it packs its outputs that pack late now (its
