@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <optional>
@@ -647,57 +648,69 @@ struct Scheduler::State {
     for (StreamId s : p.spec->also_over) n += state(s).count;
     const std::size_t wg = group_of(*p.spec);
     const std::size_t global = round_up(n, wg);
-    const std::string& label = p.spec->name;
     if (p.list && !p.list->settled) {
       ListHost host = list_host(p);
       refine(*p.spec, *p.list, p.stats, n, host);
       p.list->settled = true;
     }
-    if (redo == Redo::full) {
-      // Once a run has fallen back it stays there: its reruns must not try segments again.
-      p.mode = p.atomic_this_run ? Registration::global_atomic : registration_of(*p.spec);
-      // Outputs that memory pressure or a new run took come back at their size before
-      // any segments are taken: the segments then fit beside them, or the pass registers
-      // through the global counter (a handed-over output gets its buffer once packed).
-      for (auto& e : p.emitters)
-        if (e.handed_from == StreamId{} && !(late && state(e.stream).transient)) restore(e.stream);
-      if (p.spec->culls()) restore(p.spec->cull_target);
-      for (auto& e : p.emitters) {
-        if (e.segment_capacity == 0) e.segment_capacity = planner.first_segment_capacity(e);
-        SegmentPlanner::forget_stale_plan(e, planner.segment_count(e, global));
-        if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
-            !(release_idle_scratch() && segments_fit(e, global)))
-          fall_back_to_global_counter(p);
-      }
-      // Each emitter's segments fit alone; all of them together may not.
-      if (p.mode != Registration::global_atomic) {
-        try {
-          for (auto& e : p.emitters) prepare_segments(e, global);
-        } catch (const DeviceMemoryExhausted&) {
-          fall_back_to_global_counter(p);
-        }
-      }
-      // Lock-free: the next run tries small segments again.
-      if (p.mode == Registration::global_atomic)
-        for (auto& e : p.emitters) e.segment_capacity = planner.first_segment_capacity(e);
-      // Outputs the segments left to the global counter come back now; those that pack
-      // late get their buffer once packed.
-      for (auto& e : p.emitters) {
-        if (!packs_late(p, e)) restore(e.stream);
-        state(e.stream).released = 0;
-      }
-      if (p.spec->culls()) take_stage_scratch(p.keep, p.keep_at, n * sizeof(cl_uint), "cull flags");
-      // Without segments to hand over, the output needs its own buffer: as large as the
-      // input, a first guess that saves a rerun where the output is about its size.
-      for (auto& e : p.emitters) {
-        if (e.handed_from == StreamId{} || hands_over(p, e)) continue;
-        const std::size_t guess = state(e.stream).base + state(e.handed_from).count;
-        if (state(e.stream).capacity < guess) with_memory([&] { grow(e.stream, guess); });
-      }
-      bind_args(p);
-      context.launch(active(p), global, wg, tl(), label);
-      ++p.stats.launches;
+    if (redo == Redo::full) launch(p, n, global, wg);
+    register_outputs(p, n, global, wg);
+  }
+
+  // Sets the pass up to emit (its registration, its outputs' buffers, its segments or
+  // the global counter) and launches its kernel over `global` work-items.
+  void launch(PassState& p, std::size_t n, std::size_t global, std::size_t wg)
+  {
+    // Once a run has fallen back it stays there: its reruns must not try segments again.
+    p.mode = p.atomic_this_run ? Registration::global_atomic : registration_of(*p.spec);
+    // Outputs that memory pressure or a new run took come back at their size before
+    // any segments are taken: the segments then fit beside them, or the pass registers
+    // through the global counter (a handed-over output gets its buffer once packed).
+    for (auto& e : p.emitters)
+      if (e.handed_from == StreamId{} && !(late && state(e.stream).transient)) restore(e.stream);
+    if (p.spec->culls()) restore(p.spec->cull_target);
+    for (auto& e : p.emitters) {
+      if (e.segment_capacity == 0) e.segment_capacity = planner.first_segment_capacity(e);
+      SegmentPlanner::forget_stale_plan(e, planner.segment_count(e, global));
+      if (p.mode != Registration::global_atomic && !segments_fit(e, global) &&
+          !(release_idle_scratch() && segments_fit(e, global)))
+        fall_back_to_global_counter(p);
     }
+    // Each emitter's segments fit alone; all of them together may not.
+    if (p.mode != Registration::global_atomic) {
+      try {
+        for (auto& e : p.emitters) prepare_segments(e, global);
+      } catch (const DeviceMemoryExhausted&) {
+        fall_back_to_global_counter(p);
+      }
+    }
+    // Lock-free: the next run tries small segments again.
+    if (p.mode == Registration::global_atomic)
+      for (auto& e : p.emitters) e.segment_capacity = planner.first_segment_capacity(e);
+    // Outputs the segments left to the global counter come back now; those that pack
+    // late get their buffer once packed.
+    for (auto& e : p.emitters) {
+      if (!packs_late(p, e)) restore(e.stream);
+      state(e.stream).released = 0;
+    }
+    if (p.spec->culls()) take_stage_scratch(p.keep, p.keep_at, n * sizeof(cl_uint), "cull flags");
+    // Without segments to hand over, the output needs its own buffer: as large as the
+    // input, a first guess that saves a rerun where the output is about its size.
+    for (auto& e : p.emitters) {
+      if (e.handed_from == StreamId{} || hands_over(p, e)) continue;
+      const std::size_t guess = state(e.stream).base + state(e.handed_from).count;
+      if (state(e.stream).capacity < guess) with_memory([&] { grow(e.stream, guess); });
+    }
+    bind_args(p);
+    context.launch(active(p), global, wg, tl(), p.spec->name);
+    ++p.stats.launches;
+  }
+
+  // What the scheduler appends to a launch: the scans and merges of the emitted
+  // streams' segments, and a culling pass's compaction.
+  void register_outputs(PassState& p, std::size_t n, std::size_t global, std::size_t wg)
+  {
+    const std::string& label = p.spec->name;
     if (p.mode == Registration::lock_free) {
       for (auto& e : p.emitters) {
         auto& dst = state(e.stream);
@@ -935,30 +948,8 @@ struct Scheduler::State {
         }))
       return;
     std::vector<PassState*> packed, overflowing;
-    // Short of memory for a pass's output, where the stage's other passes are done or
-    // can run again, the run may go on in slices from that pass (run_in_slices).
-    // Not where a pass before it still overflows (it would not run again), nor where a
-    // pass after it has handed its input's buffer over (it could not).
-    const auto out_of_memory = [&](PassState* q) {
-      const auto at = std::find(stage.begin(), stage.end(), q);
-      const bool before = std::any_of(stage.begin(), at, [&](PassState* p) {
-        return std::find(overflowing.begin(), overflowing.end(), p) != overflowing.end();
-      });
-      const bool gone = std::any_of(at + 1, stage.end(), [](const PassState* p) { return p->handed_over; });
-      if (before || gone) return;
-      // The passes before it are done, and the run goes on after them.
-      finish(std::vector<PassState*>(stage.begin(), at));
-      flush_failure = std::size_t(q - passes.data());
-    };
     for (;;) {
-      queue_run_reads();
-      if (!next_counters_clear) {
-        context.fill_u32(next_counters, 0, 0, host_counters.size(), tl());
-        next_counters_clear = true;
-      }
-      if (before_counter_read) before_counter_read();
-      context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
-      ++stats.readbacks;
+      read_counters();
       // Work lists whose last batch's counts came with the read: done, or their rounds go
       // on (refine), and the pass emits again.
       for (PassState* p : stage)
@@ -966,92 +957,147 @@ struct Scheduler::State {
           if (p->list->batch_finished(counts_read(*p->list))) {
             ListHost host = list_host(*p);
             settle_list(*p->spec, *p->list, p->stats, host);
+          } else {
+            p->list->settled = false;
           }
-          else p->list->settled = false;
         }
-      // A pass whose outputs all fit is done: it packs its outputs that pack late now (its
-      // segments stay busy until then), and its segments hold nothing needed any more,
-      // so they may go back if growing another pass's output runs short of memory.
-      overflowing.clear();
-      for (PassState* p : stage)
-        if (overflowed(*p)) {
-          overflowing.push_back(p);
-        } else if (std::find(packed.begin(), packed.end(), p) == packed.end()) {
-          try {
-            pack_late(*p);
-          } catch (const DeviceMemoryExhausted&) {
-            out_of_memory(p);
-            throw;
-          }
-          packed.push_back(p);
-        }
+      pack_done(stage, packed, overflowing);
       busy.assign(overflowing.begin(), overflowing.end());
       if (overflowing.empty()) break;
-      // Pass by pass, so that one packed again gives its segments back before the next
-      // one's outputs grow. Where even the idle scratch leaves no room for a pass's
-      // outputs, the overflowing passes after it give back their segments, which hold
-      // their items until they pack, and run again in full through the global counter:
-      // so a run that fits with every pass on the global counter fits (a cull's output
-      // had failed to grow beside the busy segments of the pass after it).
-      std::vector<PassState*> unpacked;
-      for (std::size_t k = 0; k < overflowing.size(); ++k) {
-        PassState* p = overflowing[k];
-        const auto later_segments_back = [&] {
-          bool freed = false;
-          for (std::size_t j = k + 1; j < overflowing.size(); ++j) {
-            PassState& q = *overflowing[j];
-            if (q.mode == Registration::global_atomic) continue;
-            fall_back_to_global_counter(q);
-            unpacked.push_back(&q);
-            freed = true;
-          }
-          return freed;
-        };
-        try {
-          const bool atomic = p->mode == Registration::global_atomic;
-          Redo r = std::find(unpacked.begin(), unpacked.end(), p) != unpacked.end() ? Redo::full : Redo::none;
-          // What a pass emitted from a work list's state before its rounds were done
-          // counts for nothing, its overflows included: it emits again once they are.
-          const bool resumes = p->list && !p->list->settled;
-          if (resumes) r = Redo::full;
-          for (auto& e : p->emitters) {
-            if (resumes) break;
-            auto& dst = state(e.stream);
-            if (segments_overflowed(*p, e)) {
-              // The rerun plans from this execution's counts, so every group fits.
-              if (packs_late(*p, e)) merge_segments(*p, e, false);
-              if (p->mode == Registration::segmented_lock) {
-                adopt_plan(e);
-                e.exact_plan = true;
-              } else e.segment_capacity = grown(host_counters[e.overflow_slot]);
-              r = Redo::full;
-            }
-            if (outgrew(*p, e)) {
-              const bool now_atomic = grow_output(*p, e.stream, host_counters[dst.slot], later_segments_back);
-              r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
-            }
-          }
-          if (p->spec->culls() && !resumes) {
-            auto& dst = state(p->spec->cull_target);
-            if (host_counters[dst.slot] > dst.capacity) {
-              allocate_making_room([&] { with_memory([&] { grow(p->spec->cull_target, host_counters[dst.slot]); }); },
-                                   later_segments_back);
-              r = std::max(r, Redo::pack);
-            }
-          }
-          if (r == Redo::full) clear_counters(*p);
-          execute(*p, r);
-          if (!resumes) ++p->stats.reruns;
-          if (r == Redo::pack && std::none_of(p->emitters.begin(), p->emitters.end(),
-                                              [&](const EmitterState& e) { return packs_late(*p, e); }))
-            busy.erase(std::find(busy.begin(), busy.end(), p));
-        } catch (const DeviceMemoryExhausted&) {
-          out_of_memory(p);
-          throw;
-        }
-      }
+      rerun_overflowing(stage, overflowing);
     }
     finish(stage);
+  }
+
+  // The stage's counters, and the reads after the run whose writers have all run.
+  void read_counters()
+  {
+    queue_run_reads();
+    if (!next_counters_clear) {
+      context.fill_u32(next_counters, 0, 0, host_counters.size(), tl());
+      next_counters_clear = true;
+    }
+    if (before_counter_read) before_counter_read();
+    context.read(counters, host_counters.data(), host_counters.size() * sizeof(std::uint32_t), 0, tl());
+    ++stats.readbacks;
+  }
+
+  // Short of memory for a pass's output, where the stage's other passes are done or
+  // can run again, the run may go on in slices from that pass (run_in_slices).
+  // Not where a pass before it still overflows (it would not run again), nor where a
+  // pass after it has handed its input's buffer over (it could not).
+  void out_of_memory(const std::vector<PassState*>& stage, const std::vector<PassState*>& overflowing, PassState* q)
+  {
+    const auto at = std::find(stage.begin(), stage.end(), q);
+    const bool before = std::any_of(stage.begin(), at, [&](PassState* p) {
+      return std::find(overflowing.begin(), overflowing.end(), p) != overflowing.end();
+    });
+    const bool gone = std::any_of(at + 1, stage.end(), [](const PassState* p) { return p->handed_over; });
+    if (before || gone) return;
+    // The passes before it are done, and the run goes on after them.
+    finish(std::vector<PassState*>(stage.begin(), at));
+    flush_failure = std::size_t(q - passes.data());
+  }
+
+  // A pass whose outputs all fit is done: it packs its outputs that pack late now (its
+  // segments stay busy until then), and its segments hold nothing needed any more,
+  // so they may go back if growing another pass's output runs short of memory. The
+  // others are `overflowing`.
+  void pack_done(const std::vector<PassState*>& stage, std::vector<PassState*>& packed,
+                 std::vector<PassState*>& overflowing)
+  {
+    overflowing.clear();
+    for (PassState* p : stage)
+      if (overflowed(*p)) {
+        overflowing.push_back(p);
+      } else if (std::find(packed.begin(), packed.end(), p) == packed.end()) {
+        try {
+          pack_late(*p);
+        } catch (const DeviceMemoryExhausted&) {
+          out_of_memory(stage, overflowing, p);
+          throw;
+        }
+        packed.push_back(p);
+      }
+  }
+
+  // Pass by pass, so that one packed again gives its segments back before the next
+  // one's outputs grow. Where even the idle scratch leaves no room for a pass's
+  // outputs, the overflowing passes after it give back their segments, which hold
+  // their items until they pack, and run again in full through the global counter:
+  // so a run that fits with every pass on the global counter fits (a cull's output
+  // had failed to grow beside the busy segments of the pass after it).
+  void rerun_overflowing(const std::vector<PassState*>& stage, const std::vector<PassState*>& overflowing)
+  {
+    std::vector<PassState*> unpacked;
+    for (std::size_t k = 0; k < overflowing.size(); ++k) {
+      PassState* p = overflowing[k];
+      const std::function<bool()> later_segments_back = [&] {
+        bool freed = false;
+        for (std::size_t j = k + 1; j < overflowing.size(); ++j) {
+          PassState& q = *overflowing[j];
+          if (q.mode == Registration::global_atomic) continue;
+          fall_back_to_global_counter(q);
+          unpacked.push_back(&q);
+          freed = true;
+        }
+        return freed;
+      };
+      try {
+        // What a pass emitted from a work list's state before its rounds were done
+        // counts for nothing, its overflows included: it emits again once they are.
+        const bool resumes = p->list && !p->list->settled;
+        const bool fell_back = std::find(unpacked.begin(), unpacked.end(), p) != unpacked.end();
+        const Redo r = resumes || fell_back ? Redo::full : Redo::none;
+        rerun(*p, resumes ? r : std::max(r, grow_overflowed(*p, later_segments_back)));
+        if (!resumes) ++p->stats.reruns;
+      } catch (const DeviceMemoryExhausted&) {
+        out_of_memory(stage, overflowing, p);
+        throw;
+      }
+    }
+  }
+
+  // After a pass's counters show it overflowed: its segments planned anew from them, its
+  // outputs grown; returns how much of the pass must run again.
+  Redo grow_overflowed(PassState& p, const std::function<bool()>& later_segments_back)
+  {
+    const bool atomic = p.mode == Registration::global_atomic;
+    Redo r = Redo::none;
+    for (auto& e : p.emitters) {
+      auto& dst = state(e.stream);
+      if (segments_overflowed(p, e)) {
+        // The rerun plans from this execution's counts, so every group fits.
+        if (packs_late(p, e)) merge_segments(p, e, false);
+        if (p.mode == Registration::segmented_lock) {
+          adopt_plan(e);
+          e.exact_plan = true;
+        } else e.segment_capacity = grown(host_counters[e.overflow_slot]);
+        r = Redo::full;
+      }
+      if (outgrew(p, e)) {
+        const bool now_atomic = grow_output(p, e.stream, host_counters[dst.slot], later_segments_back);
+        r = std::max(r, atomic || now_atomic ? Redo::full : Redo::pack);
+      }
+    }
+    if (p.spec->culls()) {
+      auto& dst = state(p.spec->cull_target);
+      if (host_counters[dst.slot] > dst.capacity) {
+        allocate_making_room([&] { with_memory([&] { grow(p.spec->cull_target, host_counters[dst.slot]); }); },
+                             later_segments_back);
+        r = std::max(r, Redo::pack);
+      }
+    }
+    return r;
+  }
+
+  void rerun(PassState& p, Redo r)
+  {
+    if (r == Redo::full) clear_counters(p);
+    execute(p, r);
+    if (r == Redo::pack &&
+        std::none_of(p.emitters.begin(), p.emitters.end(), [&](const EmitterState& e) { return packs_late(p, e); }))
+      busy.erase(std::find(busy.begin(), busy.end(), &p));
   }
 
   // Before a counter read: the reads after the run whose streams' writers have all run
@@ -1380,10 +1426,11 @@ struct Scheduler::State {
     }
   }
 
-  void run_slices(std::size_t first, const std::vector<bool>& every_slice, const std::vector<StreamId>& outputs,
-                  const std::vector<StreamId>& once, std::size_t size)
+  // Before a run's slices: what an earlier attempt held goes back, and the outputs take
+  // what `count` slices of the last run's items need.
+  void prepare_slices(std::size_t first, const std::vector<bool>& every_slice, const std::vector<StreamId>& outputs,
+                      std::size_t count)
   {
-    const StreamId over = passes[first].spec->over;
     // What an earlier attempt held goes back: idle scratch, and sliced streams beyond
     // what a slice of the last run's items needs; the sliced passes register through
     // the global counter, whose memory is the streams themselves.
@@ -1402,7 +1449,6 @@ struct Scheduler::State {
           stats.widest_list = 0;
         }
       }
-    const std::size_t total = state(over).count, count = std::max<std::size_t>(1, (total + size - 1) / size);
     // A gathered stream takes what the last run gathered at once, instead of growing
     // slice by slice with its items held twice.
     for (const bool gathered : {false, true})
@@ -1413,6 +1459,14 @@ struct Scheduler::State {
         const std::size_t share = grown(gathered ? st.run_items : st.run_items / std::max<std::size_t>(count, 1));
         if (gathered ? st.capacity < st.run_items : st.capacity > share) grow(s, share, false);
       }
+  }
+
+  void run_slices(std::size_t first, const std::vector<bool>& every_slice, const std::vector<StreamId>& outputs,
+                  const std::vector<StreamId>& once, std::size_t size)
+  {
+    const StreamId over = passes[first].spec->over;
+    const std::size_t total = state(over).count, count = std::max<std::size_t>(1, (total + size - 1) / size);
+    prepare_slices(first, every_slice, outputs, count);
     // However the slices end, the input and the streams counted once are whole again.
     auto& in = state(over);
     struct Whole {

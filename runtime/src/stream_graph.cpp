@@ -91,112 +91,138 @@ std::vector<StreamId> pass_inputs(const PassSpec& p)
   return in;
 }
 
-std::vector<std::size_t> StreamGraph::schedule() const
+namespace {
+
+// Throws naming the pass where its launch, work list or parameters break a rule of
+// PassSpec.
+void check_launch(const StreamGraph& g, std::size_t p)
 {
-  std::vector<long> writer(streams_.size(), -1);
-  std::vector<std::vector<std::size_t>> updaters(streams_.size());  // declaration order
-  for (std::size_t p = 0; p < passes_.size(); ++p) {
-    const auto& pass = passes_[p];
-    if (pass.launches_over_stream() && pass.over.index >= streams_.size())
-      throw Error("pass " + pass.name + " is launched over an unknown stream");
-    for (std::size_t q = 0; q < p; ++q)
-      if (passes_[q].name == pass.name) throw Error("two passes are named " + pass.name);
-    for (StreamId s : pass.also_over)
-      if (s.index >= streams_.size()) throw Error("pass " + pass.name + " is launched over an unknown stream");
-    if ((pass.culls() || pass.worklist) && !pass.also_over.empty())
-      throw Error("pass " + pass.name + " culls or refines a work list, so it must be launched over one stream");
-    if (pass.culls() && pass.cull_source != pass.over)
-      throw Error("pass " + pass.name + " culls " + stream(pass.cull_source).name + " but is launched over " +
-                  stream(pass.over).name);
-    if (const auto& w = pass.worklist) {
-      if (!pass.launches_over_stream() || w->seed.empty() || w->round.empty() || w->item_bytes == 0 ||
-          w->item_bytes % 4 != 0 || w->state_bytes == 0 || w->state_bytes % 4 != 0 || w->round_items == 0 || !pass.updates.empty())
-        throw Error("pass " + pass.name +
-                    " refines a work list but lacks an input stream, a seed or round kernel, a round size or "
-                    "item and state sizes in whole words, or updates a stream in place");
-      if (w->extra_state_bytes % 4 != 0 ||
-          (w->extra_state_bytes > 0 &&
-           (w->extra_state_while.index >= params_.size() || params_[w->extra_state_while.index].bytes != 4)))
-        throw Error("pass " + pass.name + " keeps extra state that is not in whole words or not behind a 4-byte parameter");
-    }
-    if (pass.conditional() &&
-        (pass.runs_while.index >= params_.size() || params_[pass.runs_while.index].bytes != 4 || !pass.emits.empty() ||
-         pass.culls() || pass.worklist))
-      throw Error("pass " + pass.name + " runs only while a parameter is set, but that is not a 4-byte parameter, or the "
-                  "pass emits, culls or refines a work list");
-    if (!pass.variant_kernel.empty() &&
-        (pass.variant_while.index >= params_.size() || params_[pass.variant_while.index].bytes != 4 || pass.worklist))
-      throw Error("pass " + pass.name + " launches " + pass.variant_kernel +
-                  " while a parameter is set, but that is not a 4-byte parameter, or the pass refines a work list");
-    for (StreamId s : pass.updates) {
-      if (stream(s).variable) throw Error("pass " + pass.name + " updates variable-length stream " + stream(s).name);
-      if (!pass.emits.empty() || pass.culls())
-        throw Error("pass " + pass.name + " updates " + stream(s).name +
-                    " in place but also emits or culls, and so may be rerun");
-      updaters[s.index].push_back(p);
-    }
-    for (StreamId s : pass.lowers) {
-      if (stream(s).variable) throw Error("pass " + pass.name + " lowers variable-length stream " + stream(s).name);
-      updaters[s.index].push_back(p);
-    }
-    for (StreamId s : pass_outputs(pass)) {
-      if (in_place(pass, s)) continue;
-      const auto& spec = stream(s);
-      if (writer[s.index] >= 0)
-        throw Error("stream " + spec.name + " is written by both " + passes_[writer[s.index]].name + " and " + pass.name);
-      writer[s.index] = long(p);
-    }
-    for (StreamId s : pass.emits)
-      if (!stream(s).variable) throw Error("pass " + pass.name + " emits into fixed-length stream " + stream(s).name);
-    for (StreamId s : pass.writes)
-      if (stream(s).variable)
-        throw Error("pass " + pass.name + " writes variable-length stream " + stream(s).name + " without emitting");
-    if (pass.stops() &&
-        std::find(pass.writes.begin(), pass.writes.end(), pass.stop_flag) == pass.writes.end())
-      throw Error("pass " + pass.name + " stops the run on a flag it does not write");
-    if (pass.culls() && !stream(pass.cull_target).variable)
-      throw Error("pass " + pass.name + " compacts into fixed-length stream " + stream(pass.cull_target).name);
-    for (const auto& [input, output] : pass.handovers) {
-      const auto inputs = pass_inputs(pass);
-      if (std::find(inputs.begin(), inputs.end(), input) == inputs.end() ||
-          std::find(pass.emits.begin(), pass.emits.end(), output) == pass.emits.end() || !stream(input).variable ||
-          stream(input).element_bytes != stream(output).element_bytes)
-        throw Error("pass " + pass.name + " hands the buffer of " + stream(input).name + " over to " +
-                    stream(output).name + ": it must read the first, a variable stream, and emit the second, "
-                    "with items of the same size");
-      for (const auto& other : passes_) {
-        const auto reads = pass_inputs(other);
-        if (&other != &pass && std::find(reads.begin(), reads.end(), input) != reads.end())
-          throw Error("pass " + pass.name + " hands the buffer of " + stream(input).name + " over to " +
-                      stream(output).name + ", but pass " + other.name + " reads it too");
-      }
+  const auto& passes = g.passes();
+  const auto& params = g.params();
+  const auto& pass = passes[p];
+  const std::size_t streams = g.streams().size();
+  if (pass.launches_over_stream() && pass.over.index >= streams)
+    throw Error("pass " + pass.name + " is launched over an unknown stream");
+  for (std::size_t q = 0; q < p; ++q)
+    if (passes[q].name == pass.name) throw Error("two passes are named " + pass.name);
+  for (StreamId s : pass.also_over)
+    if (s.index >= streams) throw Error("pass " + pass.name + " is launched over an unknown stream");
+  if ((pass.culls() || pass.worklist) && !pass.also_over.empty())
+    throw Error("pass " + pass.name + " culls or refines a work list, so it must be launched over one stream");
+  if (pass.culls() && pass.cull_source != pass.over)
+    throw Error("pass " + pass.name + " culls " + g.stream(pass.cull_source).name + " but is launched over " +
+                g.stream(pass.over).name);
+  const auto four_bytes = [&](ParamId param) { return param.index < params.size() && params[param.index].bytes == 4; };
+  if (const auto& w = pass.worklist) {
+    if (!pass.launches_over_stream() || w->seed.empty() || w->round.empty() || w->item_bytes == 0 ||
+        w->item_bytes % 4 != 0 || w->state_bytes == 0 || w->state_bytes % 4 != 0 || w->round_items == 0 || !pass.updates.empty())
+      throw Error("pass " + pass.name +
+                  " refines a work list but lacks an input stream, a seed or round kernel, a round size or "
+                  "item and state sizes in whole words, or updates a stream in place");
+    if (w->extra_state_bytes % 4 != 0 || (w->extra_state_bytes > 0 && !four_bytes(w->extra_state_while)))
+      throw Error("pass " + pass.name + " keeps extra state that is not in whole words or not behind a 4-byte parameter");
+  }
+  if (pass.conditional() && (!four_bytes(pass.runs_while) || !pass.emits.empty() || pass.culls() || pass.worklist))
+    throw Error("pass " + pass.name + " runs only while a parameter is set, but that is not a 4-byte parameter, or the "
+                "pass emits, culls or refines a work list");
+  if (!pass.variant_kernel.empty() && (!four_bytes(pass.variant_while) || pass.worklist))
+    throw Error("pass " + pass.name + " launches " + pass.variant_kernel +
+                " while a parameter is set, but that is not a 4-byte parameter, or the pass refines a work list");
+}
+
+// Throws naming the pass where what it writes, emits, culls or hands over breaks a
+// rule of PassSpec.
+void check_outputs(const StreamGraph& g, const PassSpec& pass)
+{
+  for (StreamId s : pass.updates) {
+    if (g.stream(s).variable) throw Error("pass " + pass.name + " updates variable-length stream " + g.stream(s).name);
+    if (!pass.emits.empty() || pass.culls())
+      throw Error("pass " + pass.name + " updates " + g.stream(s).name +
+                  " in place but also emits or culls, and so may be rerun");
+  }
+  for (StreamId s : pass.lowers)
+    if (g.stream(s).variable) throw Error("pass " + pass.name + " lowers variable-length stream " + g.stream(s).name);
+  for (StreamId s : pass.emits)
+    if (!g.stream(s).variable) throw Error("pass " + pass.name + " emits into fixed-length stream " + g.stream(s).name);
+  for (StreamId s : pass.writes)
+    if (g.stream(s).variable)
+      throw Error("pass " + pass.name + " writes variable-length stream " + g.stream(s).name + " without emitting");
+  if (pass.stops() && std::find(pass.writes.begin(), pass.writes.end(), pass.stop_flag) == pass.writes.end())
+    throw Error("pass " + pass.name + " stops the run on a flag it does not write");
+  if (pass.culls() && !g.stream(pass.cull_target).variable)
+    throw Error("pass " + pass.name + " compacts into fixed-length stream " + g.stream(pass.cull_target).name);
+  for (const auto& [input, output] : pass.handovers) {
+    const auto inputs = pass_inputs(pass);
+    const std::string what = "pass " + pass.name + " hands the buffer of " + g.stream(input).name + " over to " +
+                             g.stream(output).name;
+    if (std::find(inputs.begin(), inputs.end(), input) == inputs.end() ||
+        std::find(pass.emits.begin(), pass.emits.end(), output) == pass.emits.end() || !g.stream(input).variable ||
+        g.stream(input).element_bytes != g.stream(output).element_bytes)
+      throw Error(what + ": it must read the first, a variable stream, and emit the second, with items of the same size");
+    for (const auto& other : g.passes()) {
+      const auto reads = pass_inputs(other);
+      if (&other != &pass && std::find(reads.begin(), reads.end(), input) != reads.end())
+        throw Error(what + ", but pass " + other.name + " reads it too");
     }
   }
+}
 
-  std::vector<std::vector<std::size_t>> deps(passes_.size());
-  for (std::size_t p = 0; p < passes_.size(); ++p) {
-    const auto outputs = pass_outputs(passes_[p]);
-    for (StreamId s : pass_inputs(passes_[p])) {
+// Each stream's writer (-1: none), and the passes that update or lower it in place, in
+// declaration order.
+struct Producers {
+  std::vector<long> writer;
+  std::vector<std::vector<std::size_t>> updaters;
+};
+
+void add_producer(const StreamGraph& g, std::size_t p, Producers& producers)
+{
+  const auto& pass = g.passes()[p];
+  for (StreamId s : pass.updates) producers.updaters[s.index].push_back(p);
+  for (StreamId s : pass.lowers) producers.updaters[s.index].push_back(p);
+  for (StreamId s : pass_outputs(pass)) {
+    if (in_place(pass, s)) continue;
+    long& writer = producers.writer[s.index];
+    if (writer >= 0)
+      throw Error("stream " + g.stream(s).name + " is written by both " + g.passes()[std::size_t(writer)].name +
+                  " and " + pass.name);
+    writer = long(p);
+  }
+}
+
+// The passes each pass waits for: the writers and updaters of what it reads, and of
+// what it updates the writer and the updaters declared before it.
+std::vector<std::vector<std::size_t>> dependencies(const StreamGraph& g, const Producers& producers)
+{
+  const auto& passes = g.passes();
+  std::vector<std::vector<std::size_t>> deps(passes.size());
+  for (std::size_t p = 0; p < passes.size(); ++p) {
+    const auto outputs = pass_outputs(passes[p]);
+    for (StreamId s : pass_inputs(passes[p])) {
       if (std::find(outputs.begin(), outputs.end(), s) != outputs.end())
-        throw Error("pass " + passes_[p].name + " both reads and writes stream " + stream(s).name);
-      if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
-      for (std::size_t u : updaters[s.index]) deps[p].push_back(u);  // readers see every update
+        throw Error("pass " + passes[p].name + " both reads and writes stream " + g.stream(s).name);
+      if (producers.writer[s.index] >= 0) deps[p].push_back(std::size_t(producers.writer[s.index]));
+      for (std::size_t u : producers.updaters[s.index]) deps[p].push_back(u);  // readers see every update
     }
-    const auto& pass = passes_[p];
-    std::vector<StreamId> in_place_outputs = pass.updates;
-    in_place_outputs.insert(in_place_outputs.end(), pass.lowers.begin(), pass.lowers.end());
+    std::vector<StreamId> in_place_outputs = passes[p].updates;
+    in_place_outputs.insert(in_place_outputs.end(), passes[p].lowers.begin(), passes[p].lowers.end());
     for (StreamId s : in_place_outputs) {
-      if (writer[s.index] >= 0) deps[p].push_back(std::size_t(writer[s.index]));
-      for (std::size_t u : updaters[s.index])
+      if (producers.writer[s.index] >= 0) deps[p].push_back(std::size_t(producers.writer[s.index]));
+      for (std::size_t u : producers.updaters[s.index])
         if (u < p) deps[p].push_back(u);  // updates apply in declaration order
     }
   }
+  return deps;
+}
 
+// Among passes free to go, declaration order; throws naming the passes of a cycle.
+std::vector<std::size_t> in_dependency_order(const StreamGraph& g, const std::vector<std::vector<std::size_t>>& deps)
+{
+  const auto& passes = g.passes();
   std::vector<std::size_t> order;
-  std::vector<bool> done(passes_.size(), false);
-  while (order.size() < passes_.size()) {
+  std::vector<bool> done(passes.size(), false);
+  while (order.size() < passes.size()) {
     bool progressed = false;
-    for (std::size_t p = 0; p < passes_.size() && !progressed; ++p) {
+    for (std::size_t p = 0; p < passes.size() && !progressed; ++p) {
       if (done[p]) continue;
       if (std::all_of(deps[p].begin(), deps[p].end(), [&](std::size_t d) { return done[d]; })) {
         done[p] = true;
@@ -206,12 +232,25 @@ std::vector<std::size_t> StreamGraph::schedule() const
     }
     if (!progressed) {
       std::string stuck;
-      for (std::size_t p = 0; p < passes_.size(); ++p)
-        if (!done[p]) stuck += (stuck.empty() ? "" : ", ") + passes_[p].name;
+      for (std::size_t p = 0; p < passes.size(); ++p)
+        if (!done[p]) stuck += (stuck.empty() ? "" : ", ") + passes[p].name;
       throw Error("the stream graph has a cycle among passes " + stuck);
     }
   }
   return order;
+}
+
+}  // namespace
+
+std::vector<std::size_t> StreamGraph::schedule() const
+{
+  Producers producers{std::vector<long>(streams_.size(), -1), std::vector<std::vector<std::size_t>>(streams_.size())};
+  for (std::size_t p = 0; p < passes_.size(); ++p) {
+    check_launch(*this, p);
+    check_outputs(*this, passes_[p]);
+    add_producer(*this, p, producers);
+  }
+  return in_dependency_order(*this, dependencies(*this, producers));
 }
 
 }  // namespace cstreams::runtime

@@ -175,6 +175,47 @@ std::unique_ptr<SceneSource> scene_source(const MeasureOptions& o)
   return source;
 }
 
+namespace {
+
+// One run's positions: the step's ends (both, where the step repeats), unless they were
+// uploaded ahead; and ahead, what the next run needs (this step again, or the next's end).
+void give_positions(Detector& detector, const Scene& scene, const Step& step, bool repeated, bool given_ahead,
+                    bool repeats_ahead, const Step* next)
+{
+  for (std::uint32_t obj = 0; obj < scene.objects.size(); ++obj) {
+    if (scene.objects[obj].kind == ObjectKind::static_) continue;
+    if (!given_ahead) {
+      if (repeated) detector.set_step(obj, step.x0[obj], step.x1[obj]);
+      else detector.set_positions(obj, step.x1[obj]);
+    }
+    if (repeats_ahead) detector.upload_ahead(obj, step.x0[obj], step.x1[obj]);
+    else if (next) detector.upload_ahead(obj, next->x1[obj]);
+  }
+}
+
+// A step's contacts (or earliest times), and the first contact of the run.
+void record_contacts(Measurement& m, const Detector& detector, bool earliest_only, std::size_t found, std::size_t frame)
+{
+  m.contact_count += found;
+  std::vector<double> earliest;
+  if (earliest_only) {
+    earliest = detector.earliest_toi();
+  } else {
+    const auto& contacts = detector.contacts();
+    m.contacts.insert(m.contacts.end(), contacts.begin(), contacts.end());
+    for (const Contact& c : contacts) earliest.push_back(c.toi);
+  }
+  m.step_ends.push_back(m.contacts.size());
+  // 1 is "no contact" in earliest_toi(), and the end of the step for a contact.
+  const bool any = earliest_only ? found > 0 : !earliest.empty();
+  if (m.first_contact_toi > 1 && any) {
+    m.first_contact_toi = *std::min_element(earliest.begin(), earliest.end());
+    m.first_contact_frame = frame;
+  }
+}
+
+}  // namespace
+
 Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t first, std::size_t last,
                     runtime::Context& context)
 {
@@ -201,16 +242,8 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
       // Steps that follow each other need only the new end; a repeated step both. Ahead,
       // each run uploads what the run after it needs: the first run of the first step
       // alone has its positions given before it.
-      const bool given_ahead = ahead && (r > 0 || frame != first);
-      for (std::uint32_t obj = 0; obj < scene.objects.size(); ++obj) {
-        if (scene.objects[obj].kind == ObjectKind::static_) continue;
-        if (!given_ahead) {
-          if (r > 0) detector.set_step(obj, step.x0[obj], step.x1[obj]);
-          else detector.set_positions(obj, step.x1[obj]);
-        }
-        if (ahead && r + 1 < o.repeat) detector.upload_ahead(obj, step.x0[obj], step.x1[obj]);
-        else if (next) detector.upload_ahead(obj, next->x1[obj]);
-      }
+      give_positions(detector, scene, step, r > 0, ahead && (r > 0 || frame != first), ahead && r + 1 < o.repeat,
+                     next ? &*next : nullptr);
       detector.detect(o.earliest_only ? Report::earliest_toi : Report::contacts);
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
       stats = detector.stats();
@@ -235,22 +268,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
     m.steps.back()["step_ms"] = m.step_ms.back();
     m.steps.back()["device_ms"] = device_ms;
     if (timed) m.steps.back()["device_span_ms"] = median(span);
-    m.contact_count += stats.contacts;
-    std::vector<double> earliest;
-    if (o.earliest_only) {
-      earliest = detector.earliest_toi();
-    } else {
-      const auto& contacts = detector.contacts();
-      m.contacts.insert(m.contacts.end(), contacts.begin(), contacts.end());
-      for (const Contact& c : contacts) earliest.push_back(c.toi);
-    }
-    m.step_ends.push_back(m.contacts.size());
-    // 1 is "no contact" in earliest_toi(), and the end of the step for a contact.
-    const bool any = o.earliest_only ? stats.contacts > 0 : !earliest.empty();
-    if (m.first_contact_toi > 1 && any) {
-      m.first_contact_toi = *std::min_element(earliest.begin(), earliest.end());
-      m.first_contact_frame = frame;
-    }
+    record_contacts(m, detector, o.earliest_only, stats.contacts, frame);
     if (terminal)
       std::fprintf(stderr, "\rstep %zu/%zu on %s: %zu contacts, %.3f ms   ", frame - first + 1, last - first,
                    m.device.c_str(), stats.contacts, host_ms);

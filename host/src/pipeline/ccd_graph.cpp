@@ -52,56 +52,53 @@ runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precisi
   return precision == Precision::double_ ? pass.arg(value_of(x)) : pass.arg(value_of(float_above(x)));
 }
 
-std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
-    runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, const GraphDevice& device,
-    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits)
+namespace {
+
+using ContactStreams = std::vector<std::pair<runtime::StreamId, ContactKind>>;
+using Sized = std::function<std::size_t(std::size_t)>;
+
+// The cubic solver's one pass over every candidate stream.
+void add_cubic_test(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver,
+                    const std::string& options, const ContactStreams& contacts)
 {
   using namespace runtime;
-  const std::string options = solver_build_options(solver) + (mark_limits ? " -DCS_MARK_LIMIT=1" : "");
-  const char* screen = "ccd/narrow_phase_pairs.cl";
-  const char* refine = "ccd/refine.cl";
-  auto real = [&](PassSpec& pass, double x) -> PassSpec& { return real_arg(pass, x, solver.precision); };
-  // Every candidate stream goes through one pass: small streams (the orphans') in
-  // launches of their own would each cost a launch, whatever their work.
-  const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
-  g.gather(vf);
-  g.gather(ee);
-  // Contacts are read sorted (contacts.cl), by their minimum (earliest.cl) or by their
-  // query (narrow_phase.cpp), so their passes emit them in any order.
-  const std::vector<std::pair<StreamId, ContactKind>> contacts = {{vf, ContactKind::vertex_face},
-                                                                  {ee, ContactKind::edge_edge}};
-  if (solver.solver == Solver::cubic) {
-    // In a scene of objects, in the steps that report earliest times alone, the test
-    // lowers each object's time itself and skips the pairs that cannot lower it.
-    const bool objects = in.earliest != StreamId{};
-    const std::string cubic_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "");
-    auto& test = g.pass("test candidates", {screen, "cs_cubic_pairs", cubic_options})
-                     .emit(vf)
-                     .emit(ee)
-                     .emits_in_any_order()
-                     .expect_items(0.25);
-    over_streams(test, in.candidates, "the cubic solver");
-    real(real(geometry_args(test, in, solver.precision), solver.tolerance), solver.min_separation)
-        .arg(value_of(cl_uint(solver.filter)));
-    if (objects)
-      test.instead_while(in.earliest_only, "cs_cubic_earliest_pairs")
-          .lower(in.earliest)
-          .arg(buffer_of(in.vertex_object))
-          .arg(buffer_of(in.earliest));
-    return contacts;
-  }
-  // The conservative solver refines what its screen leaves open as one work list, so
-  // that its rounds are paid once a step. In double the screen runs in float (inputs
-  // rounded outward, so that it settles only what is certain), at float's cost, and the
-  // refinement's seed and first round do in double what a second screen would: on
-  // n-body a screen in double after the float one settled 91 of the 1.19M pairs that
-  // the float one left open, for 0.42 ms.
+  const StreamId vf = contacts[0].first, ee = contacts[1].first;
+  // In a scene of objects, in the steps that report earliest times alone, the test
+  // lowers each object's time itself and skips the pairs that cannot lower it.
+  const bool objects = in.earliest != StreamId{};
+  const std::string cubic_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "");
+  auto& test = g.pass("test candidates", {"ccd/narrow_phase_pairs.cl", "cs_cubic_pairs", cubic_options})
+                   .emit(vf)
+                   .emit(ee)
+                   .emits_in_any_order()
+                   .expect_items(0.25);
+  over_streams(test, in.candidates, "the cubic solver");
+  real_arg(real_arg(geometry_args(test, in, solver.precision), solver.tolerance, solver.precision),
+           solver.min_separation, solver.precision)
+      .arg(value_of(cl_uint(solver.filter)));
+  if (objects)
+    test.instead_while(in.earliest_only, "cs_cubic_earliest_pairs")
+        .lower(in.earliest)
+        .arg(buffer_of(in.vertex_object))
+        .arg(buffer_of(in.earliest));
+}
+
+// The conservative solver refines what its screen leaves open as one work list, so
+// that its rounds are paid once a step. This is the screen; it emits the queries it
+// leaves open. In double it runs in float (inputs rounded outward, so that it settles
+// only what is certain), at float's cost, and the refinement's seed and first round do
+// in double what a second screen would: on n-body a screen in double after the float
+// one settled 91 of the 1.19M pairs that the float one left open, for 0.42 ms.
+runtime::StreamId add_conservative_screen(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver,
+                                          const std::string& options, const Sized& sized)
+{
+  using namespace runtime;
   const StreamId open = g.variable("open queries", 16, sized(1024));
   const bool in_float = solver.precision == Precision::double_ && in.x0_float != StreamId{};
   SolverOptions float_solver = solver;
   float_solver.precision = Precision::single;
   auto& test = g.pass(in_float ? "test candidates in float" : "test candidates",
-                      {screen, "cs_screen_pairs", in_float ? solver_build_options(float_solver) : options})
+                      {"ccd/narrow_phase_pairs.cl", "cs_screen_pairs", in_float ? solver_build_options(float_solver) : options})
                    .emit(open)
                    // The refinement answers each query on its own, so it takes them
                    // in any order.
@@ -114,19 +111,28 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     rounded.x1 = in.x1_float;
     real_arg(geometry_args(test, rounded, Precision::single), solver.min_separation, Precision::single);
   } else {
-    real(geometry_args(test, in, solver.precision), solver.min_separation);
+    real_arg(geometry_args(test, in, solver.precision), solver.min_separation, solver.precision);
   }
   test.arg(value_of(cl_uint(solver.filter)));
+  return open;
+}
 
-  // One box a work-item, breadth first across the device (refine.cl): an item is a
-  // query index, its work and a box of six reals; the state of a query two keys of at
-  // most one real each (a float on devices without 64-bit atomics) and eight words,
-  // and in a scene of objects three more for the steps that report earliest times alone.
+// The refinement of the open queries: one box a work-item, breadth first across the
+// device (refine.cl). An item is a query index, its work and a box of six reals; the
+// state of a query two keys of at most one real each (a float on devices without 64-bit
+// atomics) and eight words, and in a scene of objects three more for the steps that
+// report earliest times alone. On a CPU the state also keeps the query's function, 37
+// reals (CS_KEEP_FUNCTION in refine.cl).
+void add_refinement(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, const GraphDevice& device,
+                    const std::string& options, runtime::StreamId open, const ContactStreams& contacts)
+{
+  using namespace runtime;
+  const StreamId vf = contacts[0].first, ee = contacts[1].first;
   // The round kernel is heavy in registers (255 a work-item in double on the H200): in
   // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
-  // 256 (BENCHMARKS.md). On a CPU the state also keeps the query's function, 37 reals
-  // (CS_KEEP_FUNCTION in refine.cl).
+  // 256 (BENCHMARKS.md).
   constexpr std::size_t refine_group = 64;
+  const bool in_float = solver.precision == Precision::double_ && in.x0_float != StreamId{};
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
   runtime::Worklist boxes{"cs_refine_seed",
                           "cs_refine_round",
@@ -141,7 +147,7 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
   }
   const std::string refine_options =
       options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") + (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "");
-  auto& pass = g.pass("refine open queries", {refine, "cs_refine_finish", refine_options})
+  auto& pass = g.pass("refine open queries", {"ccd/refine.cl", "cs_refine_finish", refine_options})
                    .launch_over(open)
                    .refine(boxes)
                    .emit(vf)
@@ -149,7 +155,8 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
                    .emits_in_any_order()
                    .expect_items(0.5);
   pass.arg(buffer_of(open)).arg(count_of(open));
-  real(real(geometry_args(pass, in, solver.precision), solver.tolerance), solver.min_separation)
+  real_arg(real_arg(geometry_args(pass, in, solver.precision), solver.tolerance, solver.precision),
+           solver.min_separation, solver.precision)
       .arg(value_of(cl_uint(solver.max_iterations)))
       .arg(value_of(cl_uint(solver.filter && in_float)));
   if (objects)
@@ -157,6 +164,30 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
         .arg(param_of(in.earliest_only))
         .arg(buffer_of(in.vertex_object))
         .arg(buffer_of(in.object_contacts));
+}
+
+}  // namespace
+
+std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
+    runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, const GraphDevice& device,
+    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits)
+{
+  using namespace runtime;
+  const std::string options = solver_build_options(solver) + (mark_limits ? " -DCS_MARK_LIMIT=1" : "");
+  // Every candidate stream goes through one pass: small streams (the orphans') in
+  // launches of their own would each cost a launch, whatever their work.
+  const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
+  g.gather(vf);
+  g.gather(ee);
+  // Contacts are read sorted (contacts.cl), by their minimum (earliest.cl) or by their
+  // query (narrow_phase.cpp), so their passes emit them in any order.
+  const ContactStreams contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
+  if (solver.solver == Solver::cubic) {
+    add_cubic_test(g, in, solver, options, contacts);
+  } else {
+    const StreamId open = add_conservative_screen(g, in, solver, options, sized);
+    add_refinement(g, in, solver, device, options, open, contacts);
+  }
   return contacts;
 }
 
