@@ -1,11 +1,11 @@
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
-#include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 #include <cstreams/runtime/details/segment_plan.hpp>
 
 #include "scheduler/growth.hpp"
+#include "scheduler/run_reads.hpp"
 #include "scheduler/work_list.hpp"
 #include "step_arena.hpp"
 
@@ -13,7 +13,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <exception>
 #include <functional>
 #include <map>
@@ -144,22 +143,8 @@ struct Scheduler::State {
   std::vector<std::uint32_t> host_counters;
   // A work list's counts as the last counter read (or list read) brought them.
   std::uint32_t* counts_read(const ListState& l) { return host_counters.data() + l.counts_at; }
-  // Fixed streams the next run to complete reads back as it ends
-  // (Scheduler::read_after_run), and whether each read is queued after the last
-  // execution of every pass that writes it.
-  struct RunRead {
-    StreamId stream;
-    void* items;
-    std::size_t bytes;
-    std::size_t at;  // in run_read_host
-    bool queued = false;
-  };
-  std::vector<RunRead> run_reads;
+  RunReads run_reads{context};  // Scheduler::read_after_run
   std::function<void()> before_counter_read;  // Scheduler::on_counter_read
-  // Where the reads land, pinned: a queued read into pageable memory made an H200's
-  // step 0.08 ms longer (cloth-ball, earliest times alone). Copied to the caller's
-  // memory once the run is done.
-  HostStaging run_read_host;
   std::vector<StreamState> streams;
   std::vector<PassState> passes;  // execution order
   std::vector<std::vector<unsigned char>> params;
@@ -641,9 +626,7 @@ struct Scheduler::State {
   {
     p.ran = true;
     if (!run_reads.empty())
-      for (StreamId s : pass_outputs(*p.spec))
-        for (RunRead& r : run_reads)
-          if (r.stream == s) r.queued = false;
+      for (StreamId s : pass_outputs(*p.spec)) run_reads.requeue(s);
     std::size_t n = p.spec->launches_over_stream() ? state(p.spec->over).count : p.spec->items;
     for (StreamId s : p.spec->also_over) n += state(s).count;
     const std::size_t wg = group_of(*p.spec);
@@ -1105,30 +1088,22 @@ struct Scheduler::State {
   // that runs again afterwards (a rerun, a later slice) queues the read anew.
   void queue_run_reads()
   {
-    for (RunRead& r : run_reads) {
-      if (r.queued) continue;
-      const bool written = std::all_of(passes.begin(), passes.end(), [&](const PassState& p) {
-        const auto out = pass_outputs(*p.spec);
-        return std::find(out.begin(), out.end(), r.stream) == out.end() || p.ran ||
-               (p.spec->conditional() && !nonzero(p.spec->runs_while));
-      });
-      if (!written) continue;
-      context.read_queued(state(r.stream).buffer, run_read_bytes(r), r.bytes);
-      r.queued = true;
-    }
+    run_reads.queue(
+        [&](StreamId stream) {
+          return std::all_of(passes.begin(), passes.end(), [&](const PassState& p) {
+            const auto out = pass_outputs(*p.spec);
+            return std::find(out.begin(), out.end(), stream) == out.end() || p.ran ||
+                   (p.spec->conditional() && !nonzero(p.spec->runs_while));
+          });
+        },
+        buffer_of());
   }
 
-  // As a run ends: what no counter read brought back is read now.
-  void finish_run_reads()
+  // A stream's buffer, for the reads after the run.
+  RunReads::BufferOf buffer_of()
   {
-    for (const RunRead& r : run_reads) {
-      if (!r.queued) context.read(state(r.stream).buffer, run_read_bytes(r), r.bytes, 0, tl());
-      std::memcpy(r.items, run_read_bytes(r), r.bytes);
-    }
-    run_reads.clear();
+    return [this](StreamId stream) -> const Buffer& { return state(stream).buffer; };
   }
-
-  void* run_read_bytes(const RunRead& r) const { return static_cast<unsigned char*>(run_read_host.data()) + r.at; }
 
   // Passes whose outputs are all in their streams, as the counters read last say.
   void finish(const std::vector<PassState*>& done)
@@ -1220,7 +1195,7 @@ struct Scheduler::State {
         running = false;
       }
     } idle{busy, running};
-    for (RunRead& r : run_reads) r.queued = false;
+    run_reads.requeue_all();
     running = true;
     for (auto& st : streams) {
       st.earlier = 0;
@@ -1244,7 +1219,7 @@ struct Scheduler::State {
       }
       run_in_slices(sliced_pass);
     }
-    finish_run_reads();
+    run_reads.finish(buffer_of(), tl());
     keep_needed_segments();
     stats_pending = true;
   }
@@ -1688,16 +1663,7 @@ void Scheduler::read_after_run(StreamId stream, void* items, std::size_t count)
   if (spec.variable || count > s.state(stream).count)
     throw Error("cannot read " + std::to_string(count) + " items of stream " + spec.name + " after a run" +
                 (spec.variable ? ": it is variable-length" : ", which holds " + std::to_string(s.state(stream).count)));
-  const std::size_t at = s.run_reads.empty() ? 0 : s.run_reads.back().at + s.run_reads.back().bytes;
-  const std::size_t bytes = count * spec.element_bytes;
-  if (s.run_read_host.bytes() < at + bytes) {
-    // A run that threw may have left reads queued into the old memory.
-    s.context.finish();
-    HostStaging more(s.context, at + bytes, "reads after a run");
-    if (at > 0) std::memcpy(more.data(), s.run_read_host.data(), at);
-    s.run_read_host = std::move(more);
-  }
-  s.run_reads.push_back({stream, items, bytes, at});
+  s.run_reads.add(stream, items, count * spec.element_bytes);
 }
 
 void Scheduler::download(StreamId stream, void* items, std::size_t count) const
