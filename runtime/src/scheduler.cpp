@@ -5,7 +5,9 @@
 #include <cstreams/runtime/details/segment_plan.hpp>
 
 #include "scheduler/growth.hpp"
+#include "scheduler/binding.hpp"
 #include "scheduler/run_reads.hpp"
+#include "scheduler/states.hpp"
 #include "scheduler/work_list.hpp"
 #include "step_arena.hpp"
 
@@ -23,50 +25,9 @@ namespace cstreams::runtime {
 
 namespace {
 
-enum class Redo { none, pack, full };
-
-struct StreamState {
-  Buffer buffer;
-  std::size_t count = 0;
-  std::size_t capacity = 0;
-  std::size_t limit = SIZE_MAX;
-  bool known = true;
-  std::uint32_t slot = no_slot;  // count slot of a variable stream
-  std::string handed_to;         // the stream its buffer went to in the last run (PassSpec::hand_over)
-  std::size_t peak_bytes = 0;    // the most its buffer held this run
-  // In a sliced run: a gathered stream's items of earlier slices, which its producer
-  // appends to and its growth keeps; another's items of earlier slices, for the stats.
-  std::size_t base = 0;
-  std::size_t earlier = 0;
-  std::size_t run_items = 0;     // over the last run, every slice's
-  bool partial = false;          // holds the last slice's items only (not gathered)
-  std::size_t released = 0;      // the capacity memory pressure or a new run took before its producer ran
-  // Emitted anew each run (not handed over, not gathered): within a run its buffer comes
-  // from the step arena, and a new run gives it back.
-  bool transient = false;
-  std::size_t arena_at = StepArena::none;
-  bool spent = false;  // within a run only (StreamGraph::within_run), and gone back this run
-};
-
 using details::SegmentPlanner;
-using details::SegmentSizes;
 
-// An emitted stream of a pass: its registration segments' sizes (SegmentSizes, which
-// SegmentPlanner plans) and buffers.
-struct EmitterState : SegmentSizes {
-  StreamId stream;
-  StreamId handed_from;  // the input whose buffer the stream takes (PassSpec::hand_over), if any
-  Buffer items;   // registration segments, from the step arena or the idle ones; held until the stage's counters are read
-  std::size_t arena_at = StepArena::none;
-  std::size_t needed = 0;         // bytes of segments the last execution asked for
-  std::size_t segment_bytes = 0;  // of the segments this run's execution held
-  Buffer counts;  // one count per segment
-  std::size_t counts_at = StepArena::none;
-  std::uint32_t overflow_slot = no_slot;
-  // Segmented lock: this execution's segment offsets (the prefix sum of its counts,
-  // then their total), and the last execution's, which plan this one's segments.
-  Buffer offsets, plan;
-};
+enum class Redo { none, pack, full };
 
 // Segments of an output packed late up to which its merge adds up the counts before each
 // group's segments itself (a few loads a work-item) rather than after a scan's launch.
@@ -75,29 +36,6 @@ constexpr std::size_t own_offsets_most_segments = 8192;
 // Segmented lock: the most segments one group of the merge copies (CS_MERGE_SEGMENTS
 // in cl_kernels/runtime/compact.cl).
 constexpr std::size_t most_merged_per_group = 64;
-
-struct PassState {
-  const PassSpec* spec = nullptr;
-  Kernel kernel;          // built for the scheduler's registration
-  Kernel atomic_kernel;   // built on first need: the fallback when segments would not fit
-  Kernel variant, atomic_variant;  // the same two of PassSpec::instead_while's kernel
-  Registration mode = Registration::global_atomic;  // of the current execution
-  bool atomic_this_run = false;
-  bool handed_over = false;  // packed an output into its input's buffer this run
-  bool ran = false;          // executed this run
-  const Kernel& active(bool instead) const
-  {
-    const bool atomic = mode == Registration::global_atomic && atomic_kernel.get();
-    if (instead) return atomic ? atomic_variant : variant;
-    return atomic ? atomic_kernel : kernel;
-  }
-  std::vector<EmitterState> emitters;
-  Buffer keep;
-  std::size_t keep_at = StepArena::none;
-  std::optional<ListState> list;
-  std::vector<StreamId> inputs;
-  PassStats stats;
-};
 
 // The smallest of `items` that holds `need` bytes (`bytes_of` an item), or end(): the
 // one rule by which passes take idle segments and by which the scheduler works out which
@@ -491,25 +429,9 @@ struct Scheduler::State {
     return bytes.size() == 4 && (bytes[0] | bytes[1] | bytes[2] | bytes[3]) != 0;
   }
 
-  // The pass's own arguments; returns the index of the next one.
-  unsigned bind_own_args(const PassSpec& spec, const Kernel& k)
-  {
-    unsigned index = 0;
-    for (const auto& a : spec.args) {
-      if (auto b = std::get_if<BufferArg>(&a)) k.set_arg(index, state(b->stream).buffer);
-      else if (auto c = std::get_if<CountArg>(&a)) k.set_arg(index, cl_uint(state(c->stream).count));
-      else if (auto v = std::get_if<ValueArg>(&a)) k.set_raw(index, v->bytes.size(), v->bytes.data());
-      else {
-        const auto& bytes = params.at(std::get<ParamArg>(a).param.index);
-        if (bytes.empty())
-          throw Error("pass " + spec.name + " needs parameter " +
-                      graph.params()[std::get<ParamArg>(a).param.index].name + ", which was never set");
-        k.set_raw(index, bytes.size(), bytes.data());
-      }
-      ++index;
-    }
-    return index;
-  }
+  // Where a launch's arguments come from (scheduler/binding.hpp).
+  Bindings bindings() const { return {graph, streams, params, counters, no_plan, planner}; }
+  unsigned bind_own_args(const PassSpec& spec, const Kernel& k) const { return runtime::bind_own_args(bindings(), spec, k); }
 
   // The kernel an execution of p launches: its variant while the variant's parameter is set.
   const Kernel& active(const PassState& p) const
@@ -517,45 +439,7 @@ struct Scheduler::State {
     return p.active(!p.spec->variant_kernel.empty() && nonzero(p.spec->variant_while));
   }
 
-  void bind_args(PassState& p)
-  {
-    const Kernel& k = active(p);
-    unsigned index = bind_own_args(*p.spec, k);
-    if (p.list) k.set_arg(index++, p.list->state);
-    for (auto& e : p.emitters) {
-      auto& dst = state(e.stream);
-      if (p.mode == Registration::global_atomic) {
-        k.set_arg(index++, dst.buffer);
-        k.set_arg(index++, counters);
-        k.set_arg(index++, cl_uint(dst.capacity));
-        k.set_arg(index++, counters);
-        k.set_arg(index++, cl_uint(dst.slot));
-        k.set_arg(index++, counters);
-        k.set_arg(index++, cl_uint(0));
-        k.set_arg(index++, cl_uint(0));
-      } else if (p.mode == Registration::segmented_lock) {
-        k.set_arg(index++, e.items);
-        k.set_arg(index++, e.counts);
-        k.set_arg(index++, cl_uint(planner.first_segment_capacity(e)));
-        k.set_arg(index++, counters);
-        k.set_arg(index++, cl_uint(e.overflow_slot));
-        k.set_arg(index++, plan_of(e));
-        k.set_arg(index++, cl_uint(e.planned));
-        k.set_arg(index++, cl_uint(e.pool));
-      } else {
-        k.set_arg(index++, e.items);
-        k.set_arg(index++, e.counts);
-        k.set_arg(index++, cl_uint(e.segment_capacity));
-        k.set_arg(index++, counters);
-        k.set_arg(index++, cl_uint(e.overflow_slot));
-        k.set_arg(index++, e.counts);
-        k.set_arg(index++, cl_uint(0));
-        k.set_arg(index++, cl_uint(0));
-      }
-      k.set_arg(index++, cl_uint(dst.slot));
-    }
-    if (p.spec->culls()) k.set_arg(index++, p.keep);
-  }
+  void bind_args(const PassState& p) const { runtime::bind_args(bindings(), p, active(p)); }
 
   const Buffer& plan_of(const EmitterState& e) const { return e.planned ? e.plan : no_plan; }
 
