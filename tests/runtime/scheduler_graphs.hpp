@@ -96,4 +96,45 @@ inline StreamGraph begetting(StreamId& now, StreamId& next)
 }
 
 
+// values -> (expand, which lowers `least` to the least hash of each residue of the
+// values mod m) pairs, after `clear` writes `least`; then `copy` copies `least`, behind
+// the pairs where asked (a stage with no counters to read).
+struct LoweringGraph {
+  static constexpr std::size_t n = 10007, m = 61;
+  StreamGraph g;
+  StreamId values, least, copied, pairs;
+};
+
+inline LoweringGraph lowering_graph(bool copy_behind_pairs)
+{
+  const std::size_t n = LoweringGraph::n, m = LoweringGraph::m;
+  LoweringGraph l;
+  StreamGraph& g = l.g;
+  l.values = g.fixed("values", 4, n);
+  l.least = g.fixed("least", 4, m);
+  l.copied = g.fixed("copied", 4, m);
+  l.pairs = g.variable("pairs", 8, 16);
+  // Declared reader first: the scheduler must run clear, expand, copy.
+  auto& copy = g.pass("copy", {program, "test_copy"}).launch_items(m).read(l.least);
+  if (copy_behind_pairs) copy.read(l.pairs);
+  copy.write(l.copied).arg(buffer_of(l.least)).arg(value_of(cl_uint(m))).arg(buffer_of(l.copied));
+  g.pass("expand", {program, "test_expand_lowering"})
+      .launch_over(l.values)
+      .emit(l.pairs)
+      .lower(l.least)
+      .arg(buffer_of(l.values))
+      .arg(count_of(l.values))
+      .arg(value_of(cl_uint(m)))
+      .arg(buffer_of(l.least));
+  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(l.least).arg(value_of(cl_uint(m))).arg(buffer_of(l.least));
+  return l;
+}
+
+inline std::vector<std::uint32_t> least_hashes(const std::vector<std::uint32_t>& values)
+{
+  std::vector<std::uint32_t> least(LoweringGraph::m, 0xffffffffu);
+  for (std::uint32_t x : values) least[x % least.size()] = std::min(least[x % least.size()], cstreams::test::test_hash(x));
+  return least;
+}
+
 }  // namespace cstreams::test

@@ -1,5 +1,6 @@
 // The scheduler against host computations: pass order, registration, growth and reruns,
-// in-place updates, minimums, variants, reads after a run, invalid graphs.
+// in-place updates, minimums, variants. Reads after a run are in test_run_reads.cpp,
+// invalid graphs in test_stream_graph.cpp.
 #include "scheduler_graphs.hpp"
 
 #include <cstreams/runtime/error.hpp>
@@ -249,51 +250,6 @@ TEST_CASE("passes update a fixed stream in place, in declaration order, before i
   }
 }
 
-namespace {
-
-// values -> (expand, which lowers `least` to the least hash of each residue of the
-// values mod m) pairs, after `clear` writes `least`; then `copy` copies `least`, behind
-// the pairs where asked (a stage with no counters to read).
-struct LoweringGraph {
-  static constexpr std::size_t n = 10007, m = 61;
-  StreamGraph g;
-  StreamId values, least, copied, pairs;
-};
-
-LoweringGraph lowering_graph(bool copy_behind_pairs)
-{
-  const std::size_t n = LoweringGraph::n, m = LoweringGraph::m;
-  LoweringGraph l;
-  StreamGraph& g = l.g;
-  l.values = g.fixed("values", 4, n);
-  l.least = g.fixed("least", 4, m);
-  l.copied = g.fixed("copied", 4, m);
-  l.pairs = g.variable("pairs", 8, 16);
-  // Declared reader first: the scheduler must run clear, expand, copy.
-  auto& copy = g.pass("copy", {program, "test_copy"}).launch_items(m).read(l.least);
-  if (copy_behind_pairs) copy.read(l.pairs);
-  copy.write(l.copied).arg(buffer_of(l.least)).arg(value_of(cl_uint(m))).arg(buffer_of(l.copied));
-  g.pass("expand", {program, "test_expand_lowering"})
-      .launch_over(l.values)
-      .emit(l.pairs)
-      .lower(l.least)
-      .arg(buffer_of(l.values))
-      .arg(count_of(l.values))
-      .arg(value_of(cl_uint(m)))
-      .arg(buffer_of(l.least));
-  g.pass("clear", {program, "test_clear_least"}).launch_items(m).write(l.least).arg(value_of(cl_uint(m))).arg(buffer_of(l.least));
-  return l;
-}
-
-std::vector<std::uint32_t> least_hashes(const std::vector<std::uint32_t>& values)
-{
-  std::vector<std::uint32_t> least(LoweringGraph::m, 0xffffffffu);
-  for (std::uint32_t x : values) least[x % least.size()] = std::min(least[x % least.size()], cstreams::test::test_hash(x));
-  return least;
-}
-
-}  // namespace
-
 // A pass that emits may take a running minimum into a fixed stream (PassSpec::lower):
 // it runs after the stream's writer and before its reader, and growing what it emits
 // runs it again, which leaves the same minimums.
@@ -315,62 +271,6 @@ TEST_CASE("a pass that emits lowers a fixed stream to minimums, after its writer
     CHECK(s.download<std::uint32_t>(l.copied) == expected);
     CHECK(sorted(s.download<Pair>(l.pairs)) == sorted(cstreams::test::reference(v).pairs));
   }
-}
-
-// A fixed stream read back as a run ends (Scheduler::read_after_run): where every pass
-// that writes it runs before the run's last counter read, it comes back with that read
-// (no blocking read of its own), after the reruns that lower it again; else it is read
-// once the run is done. Either way the read is for that run alone. The caller's work
-// given for counter reads (Scheduler::on_counter_read) runs before each of them.
-TEST_CASE("a stream read after a run comes back with its last counter read, after the reruns that write it",
-          "[runtime][scheduler][quick]")
-{
-  auto& ctx = cstreams::test::device();
-  const std::size_t m = LoweringGraph::m;
-  // Behind the pairs, `copied` is written after the last counter read: nothing brings
-  // it back but a read of its own.
-  const LoweringGraph l = lowering_graph(true);
-  const auto v = random_values(LoweringGraph::n, 31);
-  const std::vector<std::uint32_t> expected = least_hashes(v);
-  // Blocking reads of a first run from a new scheduler, with the given reads after it.
-  const auto first_run = [&](Registration registration, const std::vector<std::pair<StreamId, std::vector<std::uint32_t>*>>& reads) {
-    Scheduler s(ctx, l.g, {registration, true});
-    s.upload(l.values, v);
-    for (auto& [stream, host] : reads) s.read_after_run(stream, host->data(), host->size());
-    const std::uint64_t before = ctx.blocking_reads();
-    s.run();
-    REQUIRE(s.stats().passes.at(1).name == "expand");
-    CHECK(s.stats().passes.at(1).reruns > 0);
-    return ctx.blocking_reads() - before;
-  };
-  for (auto registration : {Registration::lock_free, Registration::segmented_lock}) {
-    INFO(to_string(registration));
-    const std::uint64_t alone = first_run(registration, {});
-    std::vector<std::uint32_t> lowered(m, 7), copy(m, 7);
-    CHECK(first_run(registration, {{l.least, &lowered}}) == alone);
-    CHECK(lowered == expected);
-    CHECK(first_run(registration, {{l.copied, &copy}}) == alone + 1);
-    CHECK(copy == expected);
-
-    Scheduler s(ctx, l.g, {registration, true});
-    s.upload(l.values, v);
-    std::vector<std::uint32_t> once(m, 7);
-    s.read_after_run(l.least, once.data(), m);
-    // The caller's work before each counter read: as many as the run made.
-    unsigned before_reads = 0;
-    s.on_counter_read([&] { ++before_reads; });
-    s.run();
-    CHECK(before_reads == s.stats().readbacks);
-    CHECK(before_reads > 1);
-    CHECK(once == expected);
-    std::fill(once.begin(), once.end(), 7u);
-    s.run();
-    CHECK(once == std::vector<std::uint32_t>(m, 7u));
-  }
-  Scheduler s(ctx, l.g);
-  std::vector<std::uint32_t> too_many(m + 1);
-  CHECK_THROWS_WITH(s.read_after_run(l.least, too_many.data(), m + 1), Catch::Contains("which holds 61"));
-  CHECK_THROWS_WITH(s.read_after_run(l.pairs, too_many.data(), 1), Catch::Contains("variable-length"));
 }
 
 // A pass launches another kernel of its program while a parameter is set
@@ -479,81 +379,4 @@ TEST_CASE("a pass launched over several streams gets a work-item for each of the
     expected.insert(expected.end(), vb.begin(), vb.end());
     CHECK(sorted(s.download<std::uint32_t>(both)) == sorted(expected));
   }
-}
-
-
-TEST_CASE("invalid graphs are rejected with the names involved", "[runtime][scheduler][quick]")
-{
-  StreamGraph g;
-  auto a = g.variable("a", 4, 1);
-  auto b = g.variable("b", 4, 1);
-  auto f = g.fixed("f", 4, 1);
-  g.pass("p", {program, "k"}).launch_over(a).emit(b);
-  g.pass("q", {program, "k"}).launch_over(b).emit(a);
-  CHECK_THROWS_WITH(g.schedule(), Catch::Contains("cycle") && Catch::Contains("p") && Catch::Contains("q"));
-
-  StreamGraph two;
-  auto x = two.fixed("x", 4, 1);
-  auto y = two.variable("y", 4, 1);
-  two.pass("p", {program, "k"}).launch_over(x).emit(y);
-  two.pass("q", {program, "k"}).launch_over(x).emit(y);
-  CHECK_THROWS_WITH(two.schedule(), Catch::Contains("stream y is written by both p and q"));
-
-  StreamGraph self;
-  auto z = self.variable("z", 4, 1);
-  self.pass("p", {program, "k"}).launch_over(z).emit(z);
-  CHECK_THROWS_WITH(self.schedule(), Catch::Contains("both reads and writes stream z"));
-
-  StreamGraph fixed_emit;
-  auto u = fixed_emit.fixed("u", 4, 1);
-  auto v = fixed_emit.fixed("v", 4, 1);
-  fixed_emit.pass("p", {program, "k"}).launch_over(u).emit(v);
-  CHECK_THROWS_WITH(fixed_emit.schedule(), Catch::Contains("emits into fixed-length stream v"));
-
-  CHECK_THROWS_WITH(StreamGraph().fixed("odd", 6, 1), Catch::Contains("multiple of 4"));
-
-  StreamGraph lives_on;
-  const StreamId fixed = lives_on.fixed("fixed", 4, 1), kept = lives_on.variable("kept", 4, 1);
-  CHECK_THROWS_WITH(lives_on.within_run(fixed), Catch::Contains("stream fixed is fixed-length"));
-  lives_on.gather(kept);
-  CHECK_THROWS_WITH(lives_on.within_run(kept), Catch::Contains("stream kept is gathered"));
-
-  StreamGraph update_variable;
-  auto w = update_variable.variable("w", 4, 1);
-  update_variable.pass("p", {program, "k"}).launch_over(w).update(w);
-  CHECK_THROWS_WITH(update_variable.schedule(), Catch::Contains("updates variable-length stream w"));
-
-  StreamGraph update_and_emit;
-  auto fx = update_and_emit.fixed("fx", 4, 1);
-  auto out = update_and_emit.variable("out", 4, 1);
-  update_and_emit.pass("p", {program, "k"}).launch_over(fx).update(fx).emit(out);
-  CHECK_THROWS_WITH(update_and_emit.schedule(), Catch::Contains("may be rerun"));
-
-  StreamGraph lower_variable;
-  auto lv = lower_variable.variable("lv", 4, 1);
-  lower_variable.pass("p", {program, "k"}).launch_items(4).lower(lv);
-  CHECK_THROWS_WITH(lower_variable.schedule(), Catch::Contains("lowers variable-length stream lv"));
-
-  StreamGraph wide_variant;
-  auto wv = wide_variant.fixed("wv", 4, 1);
-  wide_variant.pass("p", {program, "k"}).launch_over(wv).update(wv).instead_while(wide_variant.param("mode", 8), "k2");
-  CHECK_THROWS_WITH(wide_variant.schedule(), Catch::Contains("pass p launches k2 while a parameter is set"));
-
-  StreamGraph list_without_input;
-  list_without_input.pass("p", {program, "k"}).launch_items(4).refine({"seed", "round", 8, 4, 64});
-  CHECK_THROWS_WITH(list_without_input.schedule(), Catch::Contains("pass p refines a work list but lacks"));
-
-  StreamGraph extra_behind_wide_param;
-  auto inputs = extra_behind_wide_param.fixed("inputs", 4, 1);
-  Worklist gated{"seed", "round", 8, 4, 64};
-  gated.extra_state_bytes = 4;
-  gated.extra_state_while = extra_behind_wide_param.param("mode", 8);
-  extra_behind_wide_param.pass("p", {program, "k"}).launch_over(inputs).refine(gated);
-  CHECK_THROWS_WITH(extra_behind_wide_param.schedule(), Catch::Contains("not behind a 4-byte parameter"));
-
-  StreamGraph stop_unwritten;
-  auto flag = stop_unwritten.fixed("flag", 4, 1);
-  stop_unwritten.pass("p", {program, "k"}).launch_items(4).read(flag).stop_if(flag);
-  CHECK_THROWS_WITH(stop_unwritten.schedule(), Catch::Contains("pass p stops the run on a flag it does not write"));
-  (void)f;
 }
