@@ -8,6 +8,7 @@
 #include "scheduler/binding.hpp"
 #include "scheduler/run_reads.hpp"
 #include "scheduler/states.hpp"
+#include "scheduler/stream_buffers.hpp"
 #include "scheduler/work_list.hpp"
 #include "step_arena.hpp"
 
@@ -93,6 +94,7 @@ struct Scheduler::State {
   // launch then goes first.
   bool stats_pending = false;
   StepArena arena;
+  StreamBuffers buffers{context, graph, arena, streams};
   // Until memory runs short: from then on, what lives within a run is held pass by
   // pass (segments in the idle pool, streams in buffers of their own), so that any of
   // it that is idle can go back.
@@ -110,24 +112,13 @@ struct Scheduler::State {
   const StreamState& state(StreamId s) const { return streams.at(s.index); }
   std::size_t words(StreamId s) const { return spec(s).element_bytes / 4; }
 
-  // Within a run a transient stream's old items go first and its buffer comes from the
-  // arena; otherwise the old buffer stays until the new one is allocated.
-  void allocate(StreamId s, std::size_t items)
+  // A stream's buffer at a size or grown (scheduler/stream_buffers.hpp): within a run, a
+  // transient stream's from the arena.
+  void allocate(StreamId s, std::size_t items) { buffers.allocate(s, items, running && use_arena); }
+  void drop(StreamState& st) { buffers.drop(st); }
+  void grow(StreamId s, std::size_t needed, bool slack = true)
   {
-    if (items > state(s).limit) throw StreamLimitExceeded(spec(s).name, items, state(s).limit);
-    auto& st = state(s);
-    const std::size_t bytes = items * spec(s).element_bytes;
-    if (running && use_arena && st.transient) {
-      drop(st);
-      st.buffer = arena.take(bytes, spec(s).name.c_str(), st.arena_at);
-    } else {
-      Buffer fresh(context, bytes, spec(s).name.c_str());
-      arena.give_back(st.arena_at);
-      st.buffer = std::move(fresh);
-    }
-    st.capacity = items;
-    st.peak_bytes = std::max(st.peak_bytes, st.buffer.bytes());
-    st.spent = false;
+    buffers.grow(s, needed, slack, running && use_arena, slices_left, tl());
   }
 
   void restore(StreamId s)
@@ -136,58 +127,6 @@ struct Scheduler::State {
     if (st.released > st.capacity) with_memory([&] { grow(s, st.released, false); });
     st.released = 0;
   }
-
-  void drop(StreamState& st)
-  {
-    arena.give_back(st.arena_at);
-    st.buffer = Buffer();
-    st.capacity = 0;
-  }
-
-  // Grows a variable stream to hold `needed` items, with slack up to its limit. Its
-  // producer runs again, so the old buffer goes first: the device need not hold both.
-  void grow(StreamId s, std::size_t needed, bool slack = true)
-  {
-    auto& st = state(s);
-    if (st.base > 0) return grow_gathered(s, needed, slack);
-    drop(st);
-    allocate(s, slack ? std::min(grown(needed), std::max(st.limit, needed)) : needed);
-  }
-
-  // A gathered stream keeps the items of earlier slices (StreamState::base), and its
-  // slack counts on the slices left yielding as many items as this one. Where the
-  // device cannot hold the items twice, they wait on the host.
-  void grow_gathered(StreamId s, std::size_t needed, bool slack)
-  {
-    auto& st = state(s);
-    const std::size_t bytes = st.base * spec(s).element_bytes;
-    const std::size_t items =
-        slack ? std::min(grown(needed + (needed - std::min(needed, st.base)) * slices_left), std::max(st.limit, needed))
-              : needed;
-    Buffer kept = std::move(st.buffer);
-    st.capacity = 0;
-    try {
-      allocate(s, items);
-      context.copy(kept, st.buffer, bytes, 0, 0, tl());
-      return;
-    } catch (const DeviceMemoryExhausted&) {
-    }
-    std::vector<unsigned char> waiting(bytes);
-    const std::size_t kept_items = kept.bytes() / spec(s).element_bytes;
-    context.read(kept, waiting.data(), bytes, 0, tl());
-    kept = Buffer();
-    try {
-      allocate(s, items);
-    } catch (const DeviceMemoryExhausted&) {
-      // The memory just given back holds the items again: a caller that makes room
-      // may grow the stream once more.
-      allocate(s, kept_items);
-      context.write(st.buffer, waiting.data(), bytes);
-      throw;
-    }
-    context.write(st.buffer, waiting.data(), bytes);
-  }
-
   Registration registration_of(const PassSpec& spec) const
   {
     return spec.any_order ? Registration::global_atomic : options.registration;
