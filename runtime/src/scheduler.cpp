@@ -8,6 +8,7 @@
 #include "scheduler/binding.hpp"
 #include "scheduler/run_reads.hpp"
 #include "scheduler/states.hpp"
+#include "scheduler/statistics.hpp"
 #include "scheduler/stream_buffers.hpp"
 #include "scheduler/work_list.hpp"
 #include "step_arena.hpp"
@@ -18,7 +19,6 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
-#include <map>
 #include <numeric>
 #include <optional>
 
@@ -1337,43 +1337,10 @@ struct Scheduler::State {
   void collect_stats()
   {
     stats_pending = false;
-    std::map<std::string, std::uint64_t> by_label;
-    stats.commands = timeline.resolve();
-    for (const auto& e : stats.commands) by_label[e.label] += e.nanoseconds;
-    std::uint64_t pass_total = 0;
-    // Segments are shared between stages: the run's total counts each buffer once, and
-    // once the run is over they are all idle.
-    stats.scratch_bytes = scan.scratch_bytes() + offsets.bytes();
-    for (const auto& idle : idle_segments) stats.segment_bytes += idle.bytes();
-    // The arena, less the transient streams that it holds (counted as theirs).
-    std::size_t in_streams = 0;
-    for (const auto& st : streams)
-      if (st.arena_at != StepArena::none && st.arena_at + st.buffer.bytes() <= arena.bytes()) in_streams += st.buffer.bytes();
-    stats.segment_bytes += arena.bytes() - in_streams;
-    for (auto& p : passes) {
-      p.stats.device_ns = by_label[p.spec->name];
-      pass_total += p.stats.device_ns;
-      p.stats.scratch_bytes = p.keep.bytes();
-      if (p.list) p.stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
-      for (const auto& e : p.emitters) {
-        p.stats.scratch_bytes += e.counts.bytes() + e.offsets.bytes() + e.plan.bytes();
-        p.stats.segment_bytes += e.segment_bytes;
-      }
-      stats.scratch_bytes += p.stats.scratch_bytes;
-      p.stats.scratch_bytes += p.stats.segment_bytes;
-      stats.passes.push_back(p.stats);
-    }
-    stats.scratch_bytes += stats.segment_bytes;
-    std::uint64_t all = 0;
-    for (const auto& [label, ns] : by_label) all += ns;
-    stats.scheduler_ns = all - pass_total;
-    for (std::size_t i = 0; i < streams.size(); ++i) {
-      const auto& sp = graph.streams()[i];
-      streams[i].run_items = streams[i].earlier + streams[i].count;
-      stats.streams.push_back({sp.name, sp.variable, streams[i].count, streams[i].capacity, streams[i].buffer.bytes(),
-                               streams[i].peak_bytes, streams[i].run_items});
-    }
+    runtime::collect_stats(stats, {graph, timeline, scan.scratch_bytes() + offsets.bytes(), idle_segments, arena, streams,
+                                   passes});
   }
+
 };
 
 Scheduler::Scheduler(Context& context, StreamGraph graph, SchedulerOptions options)
