@@ -1,11 +1,11 @@
 #include <cstreams/runtime/context.hpp>
+#include <cstreams/runtime/details/segment_plan.hpp>
 #include <cstreams/runtime/error.hpp>
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
-#include <cstreams/runtime/details/segment_plan.hpp>
 
-#include "scheduler/growth.hpp"
 #include "scheduler/binding.hpp"
+#include "scheduler/growth.hpp"
 #include "scheduler/run_reads.hpp"
 #include "scheduler/states.hpp"
 #include "scheduler/statistics.hpp"
@@ -14,13 +14,10 @@
 #include "step_arena.hpp"
 
 #include <algorithm>
-#include <array>
-#include <cmath>
 #include <cstdint>
 #include <exception>
 #include <functional>
 #include <numeric>
-#include <optional>
 
 namespace cstreams::runtime {
 
