@@ -7,6 +7,7 @@
 #include "scheduler/binding.hpp"
 #include "scheduler/growth.hpp"
 #include "scheduler/run_reads.hpp"
+#include "scheduler/segment_pool.hpp"
 #include "scheduler/states.hpp"
 #include "scheduler/statistics.hpp"
 #include "scheduler/stream_buffers.hpp"
@@ -34,17 +35,6 @@ constexpr std::size_t own_offsets_most_segments = 8192;
 // Segmented lock: the most segments one group of the merge copies (CS_MERGE_SEGMENTS
 // in cl_kernels/runtime/compact.cl).
 constexpr std::size_t most_merged_per_group = 64;
-
-// The smallest of `items` that holds `need` bytes (`bytes_of` an item), or end(): the
-// one rule by which passes take idle segments and by which the scheduler works out which
-// of them to keep.
-template <class Items, class Bytes> auto smallest_holding(Items& items, std::size_t need, Bytes bytes_of)
-{
-  auto best = items.end();
-  for (auto it = items.begin(); it != items.end(); ++it)
-    if (bytes_of(*it) >= need && (best == items.end() || bytes_of(*it) < bytes_of(*best))) best = it;
-  return best;
-}
 
 std::string registration_define(Registration r)
 {
@@ -133,38 +123,20 @@ struct Scheduler::State {
   // and the pass being executed; once its counters are read, those that overflowed.
   std::vector<const PassState*> busy;
 
-  // Registration segments hold a pass's items only until its stage's counters are read;
-  // then they come here, for the passes of later stages (the front update's and
-  // decompose's, say, never hold items at once).
-  std::vector<Buffer> idle_segments;
-  std::vector<std::vector<std::size_t>> stage_needs;  // of this run, each stage's emitters'
+  SegmentPool segment_pool;  // segments between stages, without the arena
 
-  // Segments of at least `bytes` for e: the smallest idle buffer that holds them, or a
-  // new one. What a buffer holds beyond the need, the rest of the stage cannot have:
-  // unless that is little, it is taken only where the device has room for it twice over.
-  // Before a new one is taken, the idle buffers too small for it go back: held through
-  // the allocation, they set the run's peak (cloth-ball's second step, whose front update
-  // outgrew the buffers the first step's stages kept, held 336 MiB where later steps
-  // hold 260), and the stages after this one can share the new buffer.
+  // Segments of at least `bytes` for e: from the arena, else from the pool, else new.
   void take_segments(EmitterState& e, std::size_t bytes)
   {
     if (use_arena) {
       e.items = arena.take(bytes, "registration segments", e.arena_at);
       return;
     }
-    const auto fits = smallest_holding(idle_segments, bytes, [](const Buffer& b) { return b.bytes(); });
-    if (fits != idle_segments.end()) {
-      const std::size_t excess = fits->bytes() - bytes;
-      const std::size_t limit = context.memory_limit(), room = limit - std::min(limit, context.memory_in_use());
-      if (excess <= bytes / 8 || 2 * excess <= room) {
-        e.items = std::move(*fits);
-        idle_segments.erase(fits);
-        return;
-      }
+    const std::size_t limit = context.memory_limit(), room = limit - std::min(limit, context.memory_in_use());
+    if (auto idle = segment_pool.take(bytes, room)) {
+      e.items = std::move(*idle);
+      return;
     }
-    idle_segments.erase(std::remove_if(idle_segments.begin(), idle_segments.end(),
-                                       [&](const Buffer& b) { return b.bytes() < bytes; }),
-                        idle_segments.end());
     with_memory([&] { e.items = Buffer(context, std::max<std::size_t>(bytes, 1), "registration segments"); });
   }
 
@@ -176,7 +148,7 @@ struct Scheduler::State {
   void give_back_segments(EmitterState& e)
   {
     if (e.arena_at != StepArena::none) drop_segments(e);
-    else if (e.items) idle_segments.push_back(std::move(e.items));
+    else if (e.items) segment_pool.give_back(std::move(e.items));
   }
 
   // Segments, with their counts where those came from the arena too.
@@ -221,60 +193,7 @@ struct Scheduler::State {
         }
       drop_stage_scratch(p->keep, p->keep_at);
     }
-    if (!needs.empty()) stage_needs.push_back(std::move(needs));
-  }
-
-  // Needs of this run's stages that buffers of these sizes would leave unserved, each
-  // stage's largest need first taking the smallest buffer that holds it; `served`, if
-  // given, gets the largest need each buffer served.
-  std::size_t unserved(const std::vector<std::size_t>& sizes, std::vector<std::size_t>* served = nullptr) const
-  {
-    std::size_t count = 0;
-    if (served) served->assign(sizes.size(), 0);
-    for (const auto& needs : stage_needs) {
-      std::vector<std::size_t> free(sizes.size());  // indices into sizes
-      for (std::size_t k = 0; k < free.size(); ++k) free[k] = k;
-      for (const std::size_t need : needs) {
-        const auto best = smallest_holding(free, need, [&](std::size_t k) { return sizes[k]; });
-        if (best == free.end()) {
-          ++count;
-          continue;
-        }
-        if (served) (*served)[*best] = std::max((*served)[*best], need);
-        free.erase(best);
-      }
-    }
-    return count;
-  }
-
-  // At the end of a run: buffers go back, smallest first, while the others would serve
-  // this run's stages as well, so that the pool settles at what the stages need, each
-  // buffer shared by as many as it can serve. Then those more than an eighth larger
-  // than the most they served go back too (a burst that has passed, or segments sized
-  // before a run had planned them), and the passes they served take buffers of their
-  // size next run: a pool held for many steps holds what the steps plan.
-  void keep_needed_segments()
-  {
-    for (auto& needs : stage_needs) std::sort(needs.begin(), needs.end(), std::greater<>());
-    std::sort(idle_segments.begin(), idle_segments.end(),
-              [](const Buffer& a, const Buffer& b) { return a.bytes() < b.bytes(); });
-    const auto sizes_of = [](const std::vector<Buffer>& buffers) {
-      std::vector<std::size_t> sizes;
-      for (const auto& b : buffers) sizes.push_back(b.bytes());
-      return sizes;
-    };
-    const std::size_t with_all = unserved(sizes_of(idle_segments));
-    std::vector<Buffer> kept;
-    for (std::size_t k = 0; k < idle_segments.size(); ++k) {
-      std::vector<std::size_t> without = sizes_of(kept);
-      for (std::size_t j = k + 1; j < idle_segments.size(); ++j) without.push_back(idle_segments[j].bytes());
-      if (unserved(without) > with_all) kept.push_back(std::move(idle_segments[k]));
-    }
-    std::vector<std::size_t> served;
-    unserved(sizes_of(kept), &served);
-    idle_segments.clear();
-    for (std::size_t k = 0; k < kept.size(); ++k)
-      if (kept[k].bytes() <= served[k] + served[k] / 8 + (1u << 20)) idle_segments.push_back(std::move(kept[k]));
+    segment_pool.stage_done(std::move(needs));
   }
 
   // Runs `allocate`; when the device has no memory left, gives back the scratch of
@@ -300,8 +219,7 @@ struct Scheduler::State {
       }
     };
     pressed = true;
-    for (auto& idle : idle_segments) release(idle);
-    idle_segments.clear();
+    if (segment_pool.release()) freed = true;
     for (auto& other : passes) {
       if (std::find(busy.begin(), busy.end(), &other) != busy.end()) continue;
       for (auto& e : other.emitters) {
@@ -982,7 +900,7 @@ struct Scheduler::State {
         e.exact_plan = false;
       }
     }
-    stage_needs.clear();
+    segment_pool.start_run();
     start_arena();
     for (auto& st : streams) st.peak_bytes = st.buffer.bytes();
     for (const auto& p : passes)
@@ -1040,7 +958,7 @@ struct Scheduler::State {
       run_in_slices(sliced_pass);
     }
     run_reads.finish(buffer_of(), tl());
-    keep_needed_segments();
+    segment_pool.keep_needed();
     stats_pending = true;
   }
 
@@ -1334,7 +1252,7 @@ struct Scheduler::State {
   void collect_stats()
   {
     stats_pending = false;
-    runtime::collect_stats(stats, {graph, timeline, scan.scratch_bytes() + offsets.bytes(), idle_segments, arena, streams,
+    runtime::collect_stats(stats, {graph, timeline, scan.scratch_bytes() + offsets.bytes(), segment_pool.idle(), arena, streams,
                                    passes});
   }
 
