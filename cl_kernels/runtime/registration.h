@@ -39,7 +39,7 @@
  * emitted then and an eighth more (with a quarter, n-body's settled step held 10 MiB
  * more at its peak); a group it did not have gets `fresh`. The spill
  * pool follows the last group's segment. The scheduler sizes the buffer by the same
- * rules (segment_items in scheduler.cpp). */
+ * rules (SegmentPlanner::segment_items, runtime/src/scheduler/segment_plan.cpp). */
 inline uint cs_segment_base(__global const uint* plan, const uint planned, const uint fresh, const uint g)
 {
   const uint k = min(g, planned), o = plan[k];
