@@ -26,7 +26,8 @@ void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes, Lis
 // Grows the lists to `items`, keeping the first `kept` items of lists[keep]: the input
 // of a round that overflowed. The other list goes back first and the kept one once
 // copied, so no more is held at once than two lists of the new size.
-void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigned keep, std::size_t kept, ListHost& host)
+void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigned keep, std::size_t kept,
+                ListHost& host)
 {
   Buffer input = std::move(l.lists[keep]);
   l.capacity = 0;
@@ -64,8 +65,7 @@ void refine(const PassSpec& spec, ListState& l, PassStats& stats, std::size_t n,
   // The last batch's counts, brought by the stage's counter read: the rounds go on.
   if (l.awaiting && settle_list(spec, l, stats, host)) return;
   if (l.reseed) {
-    const std::size_t state_bytes =
-        w.state_bytes + (host.extra_state ? w.extra_state_bytes : 0);
+    const std::size_t state_bytes = w.state_bytes + (host.extra_state ? w.extra_state_bytes : 0);
     const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
     // A state far larger than this run's goes back too (keep_needed_lists).
     if (l.state.bytes() > 2 * state_needed + kept_list_bytes) l.state = Buffer();
