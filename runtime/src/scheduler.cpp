@@ -295,7 +295,6 @@ struct Scheduler::State {
 
   void bind_args(const PassState& p) const { runtime::bind_args(bindings(), p, active(p)); }
 
-  const Buffer& plan_of(const EmitterState& e) const { return e.planned ? e.plan : no_plan; }
 
   // Segments follow the last run, so one burst (a first step searched from the roots,
   // say) can ask for more memory than the device has, or than is left of it. Then the
@@ -479,7 +478,7 @@ struct Scheduler::State {
     const bool scanned = scans_at_once(p, e), own_offsets = !scanned && copy && host_counters[e.overflow_slot] == 0;
     if (!scanned && !own_offsets)
       scan.exclusive(e.counts, e.offsets, e.segments, counters, no_slot, tl(), p.spec->name.c_str());
-    merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e),
+    merge_planned.set_args(e.items, cl_uint(words(e.stream)), e.counts, e.offsets, cl_uint(e.segments), plan_of(e, no_plan),
                            cl_uint(e.planned), cl_uint(planner.first_segment_capacity(e)), counters,
                            cl_uint(e.overflow_slot), cl_uint(e.pool), dst.buffer, cl_uint(copy ? dst.capacity : 0),
                            cl_uint(per_group), cl_uint(own_offsets));

@@ -27,39 +27,23 @@ unsigned bind_own_args(const Bindings& b, const PassSpec& spec, const Kernel& k)
 
 namespace {
 
-// An emitter's nine arguments: where its items go, its counts and capacity, the
-// counters, its overflow slot, its plan and pool (segmented lock), and its count slot.
+// An emitter's nine arguments, as CS_EMITTER_PARAMS declares them: where its items go,
+// their counts and the capacity of each, the counters and its overflow slot, the plan,
+// the segments it covers and the spill pool (segmented lock), and its count slot.
 void bind_emitter(const Bindings& b, Registration mode, const EmitterState& e, const Kernel& k, unsigned& index)
 {
   const StreamState& dst = b.streams.at(e.stream.index);
-  if (mode == Registration::global_atomic) {
-    k.set_arg(index++, dst.buffer);
-    k.set_arg(index++, b.counters);
-    k.set_arg(index++, cl_uint(dst.capacity));
-    k.set_arg(index++, b.counters);
-    k.set_arg(index++, cl_uint(dst.slot));
-    k.set_arg(index++, b.counters);
-    k.set_arg(index++, cl_uint(0));
-    k.set_arg(index++, cl_uint(0));
-  } else if (mode == Registration::segmented_lock) {
-    k.set_arg(index++, e.items);
-    k.set_arg(index++, e.counts);
-    k.set_arg(index++, cl_uint(b.planner.first_segment_capacity(e)));
-    k.set_arg(index++, b.counters);
-    k.set_arg(index++, cl_uint(e.overflow_slot));
-    k.set_arg(index++, e.planned ? e.plan : b.no_plan);
-    k.set_arg(index++, cl_uint(e.planned));
-    k.set_arg(index++, cl_uint(e.pool));
-  } else {
-    k.set_arg(index++, e.items);
-    k.set_arg(index++, e.counts);
-    k.set_arg(index++, cl_uint(e.segment_capacity));
-    k.set_arg(index++, b.counters);
-    k.set_arg(index++, cl_uint(e.overflow_slot));
-    k.set_arg(index++, e.counts);
-    k.set_arg(index++, cl_uint(0));
-    k.set_arg(index++, cl_uint(0));
-  }
+  const bool atomic = mode == Registration::global_atomic, locked = mode == Registration::segmented_lock;
+  const std::size_t capacity =
+      atomic ? dst.capacity : locked ? b.planner.first_segment_capacity(e) : e.segment_capacity;
+  k.set_arg(index++, atomic ? dst.buffer : e.items);
+  k.set_arg(index++, atomic ? b.counters : e.counts);
+  k.set_arg(index++, cl_uint(capacity));
+  k.set_arg(index++, b.counters);
+  k.set_arg(index++, cl_uint(atomic ? dst.slot : e.overflow_slot));
+  k.set_arg(index++, atomic ? b.counters : locked ? plan_of(e, b.no_plan) : e.counts);
+  k.set_arg(index++, cl_uint(locked ? e.planned : 0));
+  k.set_arg(index++, cl_uint(locked ? e.pool : 0));
   k.set_arg(index++, cl_uint(dst.slot));
 }
 

@@ -60,6 +60,9 @@ struct EmitterState : details::SegmentSizes {
   Buffer offsets, plan;
 };
 
+// The plan the emitter's kernels and merge read: its own, else `no_plan` (one zero).
+inline const Buffer& plan_of(const EmitterState& e, const Buffer& no_plan) { return e.planned ? e.plan : no_plan; }
+
 struct PassState {
   const PassSpec* spec = nullptr;
   Kernel kernel;          // built for the scheduler's registration
