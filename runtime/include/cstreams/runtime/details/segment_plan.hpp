@@ -37,7 +37,6 @@ class SegmentPlanner {
 public:
   SegmentPlanner(Registration mode, std::size_t work_group) : mode_(mode), work_group_(work_group) {}
 
-  Registration mode() const { return mode_; }
   // Segments a launch of `global` work-items registers in.
   std::size_t segment_count(const SegmentSizes& s, std::size_t global) const;
   // What a segment the plan does not cover holds: a group's (or work-item's) expected items.
