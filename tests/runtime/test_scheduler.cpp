@@ -1,7 +1,10 @@
-// The scheduler against host computations: pass order, registration, growth and reruns,
-// in-place updates, minimums, variants. Reads after a run are in test_run_reads.cpp,
-// invalid graphs in test_stream_graph.cpp.
+// The run loop against host computations: passes in order and in stages, in-place updates,
+// minimums, variants, passes behind a parameter, launches over several streams, and the
+// run's figures. Reruns are in test_flush.cpp, registration in test_registrar.cpp,
+// memory in test_scratch.cpp, test_late_packing.cpp and test_slices.cpp, reads after a
+// run in test_run_reads.cpp, invalid graphs in test_stream_graph.cpp.
 #include "scheduler_graphs.hpp"
+#include "checked_graph.hpp"
 
 #include <cstreams/runtime/error.hpp>
 #include <cstreams/runtime/scheduler.hpp>
@@ -18,133 +21,11 @@ using namespace cstreams::test;
 using cstreams::test::Pair;
 using cstreams::test::Quad;
 
-namespace {
-
-struct TestGraph {
-  StreamGraph graph;
-  StreamId values, squares, pairs, kept, even, odd;
-
-  TestGraph(std::size_t n, std::size_t capacity)
-  {
-    values = graph.fixed("values", 4, n);
-    squares = graph.fixed("squares", 4, n);
-    pairs = graph.variable("pairs", 8, capacity);
-    kept = graph.variable("kept", 8, capacity);
-    even = graph.variable("even", 4, capacity);
-    odd = graph.variable("odd", 16, capacity);
-    // Declared out of order on purpose: the scheduler must put split last.
-    add_split(graph, kept, squares, even, odd);
-    graph.pass("expand", {program, "test_expand"})
-        .launch_over(values)
-        .emit(pairs)
-        .arg(buffer_of(values))
-        .arg(count_of(values));
-    add_square(graph, values, squares);
-    graph.pass("cull", {program, "test_keep"}).launch_over(pairs).cull(pairs, kept).arg(buffer_of(pairs)).arg(count_of(pairs));
-  }
-};
-
-void check_graph(std::size_t n, Registration registration, std::size_t capacity, std::uint32_t seed)
-{
-  auto& ctx = cstreams::test::device();
-  TestGraph t(n, capacity);
-
-  Scheduler scheduler(ctx, t.graph, {registration, true});
-  CHECK(scheduler.execution_order() == std::vector<std::string>{"expand", "square", "cull", "split"});
-
-  const auto values = random_values(n, seed);
-  const auto expected = cstreams::test::reference(values);
-  scheduler.upload(t.values, values);
-  for (int frame = 0; frame < 2; ++frame) {
-    scheduler.run();
-    INFO("n = " << n << ", registration = " << to_string(registration) << ", capacity = " << capacity
-                << ", frame = " << frame);
-    auto pairs = scheduler.download<Pair>(t.pairs);
-    auto kept = scheduler.download<Pair>(t.kept);
-    auto even = scheduler.download<std::uint32_t>(t.even);
-    auto odd = scheduler.download<Quad>(t.odd);
-    if (registration == Registration::lock_free) {
-      // Per-thread segments merged in thread order reproduce the sequential order.
-      CHECK(pairs == expected.pairs);
-      CHECK(kept == expected.kept);
-      CHECK(even == expected.even);
-      CHECK(odd == expected.odd);
-    } else {
-      CHECK(sorted(pairs) == sorted(expected.pairs));
-      CHECK(sorted(kept) == sorted(expected.kept));
-      CHECK(sorted(even) == sorted(expected.even));
-      CHECK(sorted(odd) == sorted(expected.odd));
-    }
-    const auto& stats = scheduler.stats();
-    if (frame == 1) {
-      // Capacities grown in the first frame are kept: the steady state reruns nothing.
-      for (const auto& p : stats.passes) CHECK(p.reruns == 0);
-      CHECK(stats.readbacks == 3);  // one per stage: after expand, after cull, after split
-      // Scratch is reported per pass: registration segments where there are any, cull flags.
-      for (const auto& p : stats.passes) {
-        // A device short of memory (rusticl at millions of items) gives idle flags back.
-        if (p.name == "cull" && p.scratch_bytes > 0) CHECK(p.scratch_bytes >= pairs.size() * sizeof(std::uint32_t));
-        if (n > 0 && p.name == "expand") CHECK((p.scratch_bytes > 0) == (registration != Registration::global_atomic));
-      }
-      // Segments go from one stage's passes to a later one's: the run counts each buffer
-      // once, and what it keeps for the next.
-      CHECK(stats.segment_bytes <= stats.scratch_bytes);
-    }
-  }
-}
-
-}  // namespace
-
 TEST_CASE("the scheduler orders passes and matches the host for every registration", "[runtime][scheduler][quick]")
 {
   for (auto registration : {Registration::lock_free, Registration::segmented_lock, Registration::global_atomic})
     for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(255), std::size_t(257), std::size_t(20000)})
       check_graph(n, registration, 1 << 16, std::uint32_t(n) + 1);
-}
-
-TEST_CASE("tiny capacities grow and rerun without losing an item", "[runtime][scheduler][quick]")
-{
-  for (auto registration : {Registration::lock_free, Registration::segmented_lock, Registration::global_atomic})
-    for (std::size_t capacity : {std::size_t(0), std::size_t(1), std::size_t(37)})
-      check_graph(30011, registration, capacity, 99);
-}
-
-TEST_CASE("random sizes up to millions of items", "[runtime][scheduler][slow]")
-{
-  std::mt19937 rng(2011);
-  std::uniform_int_distribution<std::size_t> size(0, 3'000'000);
-  for (auto registration : {Registration::lock_free, Registration::segmented_lock, Registration::global_atomic}) {
-    check_graph(size(rng), registration, 1, std::uint32_t(rng()));
-    check_graph(size(rng), registration, 1 << 20, std::uint32_t(rng()));
-  }
-}
-
-TEST_CASE("overflow reruns are counted and capacities reported", "[runtime][scheduler][quick]")
-{
-  auto& ctx = cstreams::test::device();
-  StreamGraph g;
-  auto values = g.fixed("values", 4, 0);
-  auto pairs = g.variable("pairs", 8, 1);
-  g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs).arg(buffer_of(values)).arg(count_of(values));
-  Scheduler s(ctx, g, {Registration::segmented_lock, true});
-  s.upload(values, random_values(5000, 3));
-  s.run();
-  const auto expected = cstreams::test::reference(random_values(5000, 3)).pairs;
-  CHECK(s.count(pairs) == expected.size());
-  CHECK(s.capacity(pairs) >= expected.size());
-  REQUIRE(s.stats().passes.size() == 1);
-  CHECK(s.stats().passes[0].reruns >= 1);
-  CHECK(s.stats().passes[0].device_ns > 0);
-  CHECK(s.stats().streams[1].bytes >= expected.size() * 8);
-  CHECK(s.stats().streams[1].peak_bytes >= s.stats().streams[1].bytes);
-  CHECK(s.stats().scratch_bytes > 0);
-
-  // A smaller capacity keeps the items that still fit.
-  const auto all = s.download<Pair>(pairs);
-  const std::size_t half = all.size() / 2;
-  s.set_capacity(pairs, half);
-  CHECK(s.capacity(pairs) == half);
-  CHECK(s.download<Pair>(pairs) == std::vector<Pair>(all.begin(), all.begin() + std::ptrdiff_t(half)));
 }
 
 // The figures are gathered once asked for, so that a caller's next launch need not wait
@@ -179,44 +60,6 @@ TEST_CASE("a run's figures describe its streams as it ended, whatever changed th
     if (swapped) s.swap(pairs, spare);
   }
 }
-
-TEST_CASE("a pass that emits in any order registers through the global counter, losing no item and launching less",
-          "[runtime][scheduler][quick]")
-{
-  auto& ctx = cstreams::test::device();
-  const auto v = random_values(30011, 5);
-  const auto expected = cstreams::test::reference(v).pairs;
-  for (auto registration : {Registration::segmented_lock, Registration::lock_free})
-    for (std::size_t capacity : {std::size_t(1), std::size_t(1) << 17}) {
-      INFO("registration = " << to_string(registration) << ", capacity = " << capacity);
-      // Steady launches of a settled run of the expansion, with and without the order.
-      std::uint64_t launches[2];
-      for (const bool any_order : {false, true}) {
-        StreamGraph g;
-        const StreamId values = g.fixed("values", 4, v.size()), pairs = g.variable("pairs", 8, capacity);
-        auto& expand = g.pass("expand", {program, "test_expand"}).launch_over(values).emit(pairs);
-        expand.arg(buffer_of(values)).arg(count_of(values));
-        if (any_order) expand.emits_in_any_order();
-        Scheduler s(ctx, g, {registration, true});
-        s.upload(values, v);
-        s.run();
-        CHECK(sorted(s.download<Pair>(pairs)) == sorted(expected));
-        const std::uint64_t before = ctx.kernel_launches();
-        s.run();
-        launches[any_order] = ctx.kernel_launches() - before;
-        CHECK(sorted(s.download<Pair>(pairs)) == sorted(expected));
-        CHECK(s.stats().passes.at(0).reruns == 0);
-        if (any_order) CHECK(s.stats().passes.at(0).segment_bytes == 0);
-      }
-      // The segments' scan and merge (lock-free: scan and interleaved merge) are gone.
-      CHECK(launches[1] < launches[0]);
-      CHECK(launches[1] == 1);
-    }
-}
-
-// One pass that expands values into pairs, through segmented locks, in groups of
-// `group` work-items (0: the context's). run(v) runs `v`, checks every item and the
-// merge's order by group, and returns the pass's reruns.
 
 TEST_CASE("passes update a fixed stream in place, in declaration order, before its readers", "[runtime][scheduler][quick]")
 {
@@ -354,7 +197,6 @@ TEST_CASE("a pass runs only while its parameter is set, and its output keeps wha
   add_square_while(eight_bytes, eight_bytes.param("wide", 8));
   CHECK_THROWS_WITH(Scheduler(ctx, eight_bytes, {}), Catch::Contains("square") && Catch::Contains("parameter"));
 }
-
 
 TEST_CASE("a pass launched over several streams gets a work-item for each of their items", "[runtime][scheduler][quick]")
 {

@@ -1,6 +1,6 @@
 // The sizing rules of registration segments (runtime/details/segment_plan.hpp), on the
 // host alone: what a launch's segments and spill pool hold before and after a plan, and
-// what a launch's counts leave for the next. test_scheduler_segments.cpp runs them on a
+// what a launch's counts leave for the next. test_registrar.cpp runs them on a
 // device.
 #include <cstreams/runtime/details/segment_plan.hpp>
 

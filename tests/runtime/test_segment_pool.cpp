@@ -1,6 +1,6 @@
 // Segments waiting between stages (runtime/src/scheduler/segment_pool.*): which idle
 // buffer a pass takes, and which the pool keeps once a run's stages are known.
-// test_scheduler_memory.cpp runs it inside the scheduler.
+// test_scratch.cpp runs it inside the scheduler.
 #include "../../runtime/src/scheduler/segment_pool.hpp"
 #include "../support/test_device.hpp"
 

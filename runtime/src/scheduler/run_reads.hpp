@@ -3,8 +3,8 @@
 // land, which are queued ahead of a counter read once every writer of their stream has
 // run (so that they come back with it, at no round trip of their own), and the copy to
 // the caller's memory once the run is done. Owns those reads and their host memory; it
-// launches nothing and allocates no device memory: the scheduler says which streams are
-// written and lends their buffers (runtime/src/scheduler.cpp). Private to the runtime.
+// launches nothing and allocates no device memory: Flush says which streams are written
+// and lends their buffers (scheduler/flush.cpp). Private to the runtime.
 #include <cstreams/runtime/buffer.hpp>
 #include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/stream_graph.hpp>

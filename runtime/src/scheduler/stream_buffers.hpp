@@ -1,9 +1,10 @@
 #pragma once
 // A stream's buffer: allocated at a size (from the step arena for a stream emitted anew
 // each run, while a run uses the arena), dropped, and grown with slack up to the
-// stream's limit, a gathered stream keeping the items of earlier slices. Owns how a
-// buffer changes size; not when (the scheduler decides) nor what goes to make room (the
-// scheduler's with_memory wraps the calls that may). Private to the runtime.
+// stream's limit, a gathered stream keeping the items of earlier slices; and the view of
+// the streams' state and specs that the scheduler's parts share. Owns how a buffer
+// changes size; not when (the parts decide) nor what goes to make room (Scratch's
+// with_memory wraps the calls that may). Private to the runtime.
 #include "states.hpp"
 
 #include <cstddef>
@@ -17,29 +18,43 @@ class Timeline;
 
 class StreamBuffers {
 public:
-  StreamBuffers(Context& context, const StreamGraph& graph, StepArena& arena, std::vector<StreamState>& streams)
-      : context_(context), graph_(graph), arena_(arena), streams_(streams)
+  StreamBuffers(Context& context, const StreamGraph& graph, StepArena& arena, std::vector<StreamState>& streams,
+                Timeline* timeline)
+      : context_(context), graph_(graph), arena_(arena), streams_(streams), timeline_(timeline)
   {
   }
 
+  StreamState& state(StreamId s) { return streams_.at(s.index); }
+  const StreamState& state(StreamId s) const { return streams_.at(s.index); }
+  const StreamSpec& spec(StreamId s) const { return graph_.stream(s); }
+  std::size_t words(StreamId s) const { return spec(s).element_bytes / 4; }
+  std::vector<StreamState>& all() { return streams_; }
+
+  // Within a run that uses the step arena, transient streams' buffers come from it.
+  void set_from_arena(bool from_arena) { from_arena_ = from_arena; }
+  // In a sliced run, the slices after the one running.
+  void set_slices_left(std::size_t slices) { slices_left_ = slices; }
+
   // Throws StreamLimitExceeded past the stream's limit. A transient stream's buffer
-  // comes from the arena where `from_arena`, its old items going first; otherwise the
+  // comes from the arena where it is in use, its old items going first; otherwise the
   // old buffer stays until the new one is allocated.
-  void allocate(StreamId s, std::size_t items, bool from_arena);
+  void allocate(StreamId s, std::size_t items);
   void drop(StreamState& st);
   // Grows a variable stream to hold `needed` items, with slack up to its limit (a
-  // gathered stream's counting on `slices_left` slices yielding as many as this one).
+  // gathered stream's counting on the slices left yielding as many as this one).
   // Its producer runs again, so the old buffer goes first: the device need not hold both.
-  void grow(StreamId s, std::size_t needed, bool slack, bool from_arena, std::size_t slices_left, Timeline* timeline);
+  void grow(StreamId s, std::size_t needed, bool slack = true);
 
 private:
-  void grow_gathered(StreamId s, std::size_t needed, bool slack, bool from_arena, std::size_t slices_left,
-                     Timeline* timeline);
+  void grow_gathered(StreamId s, std::size_t needed, bool slack);
 
   Context& context_;
   const StreamGraph& graph_;
   StepArena& arena_;
   std::vector<StreamState>& streams_;
+  Timeline* timeline_;  // profiling, or none
+  bool from_arena_ = false;
+  std::size_t slices_left_ = 0;
 };
 
 }  // namespace cstreams::runtime

@@ -4,7 +4,7 @@
 // lists where a round overflows them. It owns those buffers and the batching; it may not
 // touch other passes, streams or the scheduler's counters beyond its own words: it
 // allocates, binds the pass's own arguments and counts its reads through ListHost,
-// which the scheduler lends it (runtime/src/scheduler.cpp). Private to the runtime.
+// which the run loop lends it (runtime/src/scheduler.cpp). Private to the runtime.
 #include <cstreams/runtime/buffer.hpp>
 #include <cstreams/runtime/kernel.hpp>
 #include <cstreams/runtime/scheduler.hpp>
@@ -84,7 +84,7 @@ struct ListHost {
 // again, as a replay (cl_kernels/runtime/worklist.h), once they have grown to what it
 // asked for with its input kept; a seed that overflows starts again.
 // The pass emits from the state as it stands after a batch, and the stage's counter
-// read brings the counts with it (flush, settle_list), which saves a round trip where
+// read brings the counts with it (Flush, settle_list), which saves a round trip where
 // the batch was the last; where it was not, the rounds go on from there and the pass
 // emits again. On a device that ends loops early, each round goes over exactly its
 // items, one a work-item, so that no work-item strides over many: the host waits for

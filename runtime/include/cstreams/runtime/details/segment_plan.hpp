@@ -3,7 +3,7 @@
 // how many items an emitted stream's segments and spill pool hold for a launch, and
 // what a launch's counts change in the plan. Owns this arithmetic alone: it holds no
 // buffers and touches no device, so the scheduler allocates what it says and keeps the
-// plan's offsets itself (runtime/src/scheduler.cpp). Private to the runtime.
+// plan's offsets itself (runtime/src/scheduler/registrar.cpp). Private to the runtime.
 #include <cstreams/runtime/registration.hpp>
 
 #include <cstddef>

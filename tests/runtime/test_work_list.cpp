@@ -1,5 +1,5 @@
-// Work lists: rounds on the device, growth and replay, counts with the stage's counters,
-// extra state behind a parameter, and slices.
+// Work lists (scheduler/work_list.cpp): rounds on the device, growth and replay, counts
+// with the stage's counters, extra state behind a parameter, and slices.
 #include "scheduler_graphs.hpp"
 
 #include <cstreams/runtime/error.hpp>
