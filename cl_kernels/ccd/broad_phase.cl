@@ -98,6 +98,119 @@ inline uint cs_level(__global const int2* nodes, const int2 p)
  * search starts from was tested before it waits). */
 inline int2 cs_waiting(const int2 p, const int overlap_known) { return overlap_known ? (int2)(-1 - p.x, p.y) : p; }
 
+/* What a pair does in the front update (cs_front_update), each where its flag is set:
+ * it places a pair in the next front, reports the faces of two overlapping leaves, or
+ * waits to be searched. */
+#define CS_EMITS_FRONT 1
+#define CS_EMITS_FACES 2
+#define CS_SEARCHES 4
+
+/* A pair of the current front before the group's search: one deeper than `cap` stands
+ * for its ancestor at the cap; one whose boxes are apart climbs as far as boxes stay
+ * apart and takes its place in the next front where it is on its ancestor's chain of
+ * first children; two overlapping leaves are settled here. Returns what it does
+ * (CS_EMITS_*, or CS_SEARCHES with `search` the pair to search as it waits,
+ * cs_waiting). */
+inline int cs_front_start(int2 p, __global const int2* nodes, __global const float* node_boxes,
+                          __global const uint* faces, const uint cap, int2* front, uint2* face_pair, int2* search)
+{
+  int live = 1;
+  while (live && cs_level(nodes, p) > cap) {
+    const int2 q = cs_bvtt_parent(nodes, p);
+    live = cs_is_first_child(nodes, q, p);
+    p = q;
+  }
+  if (!live) return 0;
+  int apart = 0;
+  if (p.x != p.y) {
+    /* Most of a settled front's pairs are apart, and so they test their parent too.
+     * The parent keeps one of the pair's nodes, so that node's box is read once for
+     * both tests (H200: cloth-ball's front update 0.350 -> 0.335 ms with the leaves'
+     * path below). */
+    const int2 q = cs_bvtt_parent(nodes, p);
+    const int keeps_y = q.y == p.y;
+    float kept[CS_DOP_FLOATS];
+    cs_dop_load(node_boxes + CS_DOP_FLOATS * (keeps_y ? p.y : p.x), kept);
+    apart = cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? p.x : p.y));
+    if (apart && CS_KEEP_FRONT) {
+      const int parent_overlaps =
+          q.x < 0 || q.x == q.y || !cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? q.x : q.y));
+      *front = p;
+      if (parent_overlaps) return CS_EMITS_FRONT;
+      if (!cs_is_first_child(nodes, q, p)) return 0;
+      p = q;
+    }
+  }
+  if (apart) {
+    /* p's boxes are apart, as are those of the pair below it that climbed here. */
+    while (CS_KEEP_FRONT) {
+      const int2 q = cs_bvtt_parent(nodes, p);
+      if (q.x < 0 || cs_pair_overlaps(node_boxes, q)) {
+        *front = p;
+        return CS_EMITS_FRONT;
+      }
+      if (!cs_is_first_child(nodes, q, p)) return 0;
+      p = q;
+    }
+    return 0;
+  }
+  if (p.x != p.y && nodes[p.x].x < 0 && nodes[p.y].x < 0) {
+    /* Two overlapping leaves, as most of a settled front's other pairs are: settled
+     * here rather than through the search. */
+    const uint fa = (uint)cs_node_face(nodes[p.x]), fb = (uint)cs_node_face(nodes[p.y]);
+    *front = p;
+    *face_pair = (uint2)(fa, fb);
+    return CS_EMITS_FRONT | (cs_faces_adjacent(faces, fa, fb) ? 0 : CS_EMITS_FACES);
+  }
+  /* The pair the search starts from overlaps, as tested above; testing its boxes again
+   * cost the front update a tenth (H100: cloth-ball 0.40 -> 0.36 ms, n-body 0.56 ->
+   * 0.48). */
+  *search = cs_waiting(p, p.x != p.y);
+  return CS_SEARCHES;
+}
+
+/* One pair of the group's search, `w` as it waited (cs_waiting): its children to
+ * search, of which it returns how many (a pair of distinct nodes whose boxes overlap
+ * descends one of them, a node against itself has three), and what it emits
+ * (CS_EMITS_* in `emits`): the pairs where the search stops (boxes apart, or two
+ * leaves) and the overlapping ones at the cap, below which it goes on without
+ * emitting. */
+inline int cs_search_visit(const int2 w, __global const int2* nodes, __global const float* node_boxes,
+                           __global const uint* faces, const uint cap, int2 children[3], int2* front,
+                           uint2* face_pair, int* emits)
+{
+  const int overlap_known = w.x < 0;
+  const int2 q = overlap_known ? (int2)(-1 - w.x, w.y) : w;
+  const int2 a = nodes[q.x], b = nodes[q.y];
+  const uint level = (uint)(cs_node_depth(a) + cs_node_depth(b));
+  const int in_front = CS_KEEP_FRONT && level <= cap;
+  *front = q;
+  *emits = 0;
+  if (q.x == q.y) {
+    if (a.x < 0) return 0;
+    if (in_front && cap - level < 2) *emits = CS_EMITS_FRONT;
+    children[0] = (int2)(a.x, a.x);
+    children[1] = (int2)(a.x + 1, a.x + 1);
+    children[2] = (int2)(a.x, a.x + 1);
+    return 3;
+  }
+  if (!overlap_known && !cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
+    if (in_front) *emits = CS_EMITS_FRONT;
+    return 0;
+  }
+  if (a.x < 0 && b.x < 0) {
+    const uint fa = (uint)cs_node_face(a), fb = (uint)cs_node_face(b);
+    *face_pair = (uint2)(fa, fb);
+    *emits = (in_front ? CS_EMITS_FRONT : 0) | (cs_faces_adjacent(faces, fa, fb) ? 0 : CS_EMITS_FACES);
+    return 0;
+  }
+  if (in_front && level == cap) *emits = CS_EMITS_FRONT;
+  const int first = cs_descends_first(a, b);
+  children[0] = first ? (int2)(a.x, q.y) : (int2)(q.x, b.x);
+  children[1] = first ? (int2)(a.x + 1, q.y) : (int2)(q.x, b.x + 1);
+  return 2;
+}
+
 /* One work-item per pair of the current front (a cut of the BVTT: every pair of
  * leaves lies under exactly one of its pairs). With CS_KEEP_FRONT, emits the next front:
  *  - a pair deeper than `cap` stands for its ancestor at level <= cap;
@@ -135,55 +248,13 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
   barrier(CLK_LOCAL_MEM_FENCE);
   const uint s = get_global_id(0);
   if (s < n) {
-    int2 p = front[s];
-    int live = 1;
-    while (live && cs_level(nodes, p) > cap) {
-      const int2 q = cs_bvtt_parent(nodes, p);
-      live = cs_is_first_child(nodes, q, p);
-      p = q;
-    }
-    int apart = 0;
-    if (live && p.x != p.y) {
-      /* Most of a settled front's pairs are apart, and so they test their parent too.
-       * The parent keeps one of the pair's nodes, so that node's box is read once for
-       * both tests (H200: cloth-ball's front update 0.350 -> 0.335 ms with the leaves'
-       * path below). */
-      const int2 q = cs_bvtt_parent(nodes, p);
-      const int keeps_y = q.y == p.y;
-      float kept[CS_DOP_FLOATS];
-      cs_dop_load(node_boxes + CS_DOP_FLOATS * (keeps_y ? p.y : p.x), kept);
-      apart = cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? p.x : p.y));
-      if (apart && CS_KEEP_FRONT) {
-        const int parent_overlaps =
-            q.x < 0 || q.x == q.y || !cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? q.x : q.y));
-        if (parent_overlaps) CS_FRONT_EMIT(p);
-        live = !parent_overlaps && cs_is_first_child(nodes, q, p);
-        p = q;
-      }
-    }
-    if (live && apart) {
-      /* p's boxes are apart, as are those of the pair below it that climbed here. */
-      while (CS_KEEP_FRONT) {
-        const int2 q = cs_bvtt_parent(nodes, p);
-        if (q.x < 0 || cs_pair_overlaps(node_boxes, q)) {
-          CS_FRONT_EMIT(p);
-          break;
-        }
-        if (!cs_is_first_child(nodes, q, p)) break;
-        p = q;
-      }
-    } else if (live && p.x != p.y && nodes[p.x].x < 0 && nodes[p.y].x < 0) {
-      /* Two overlapping leaves, as most of a settled front's other pairs are: settled
-       * here rather than through the search. */
-      const uint fa = (uint)cs_node_face(nodes[p.x]), fb = (uint)cs_node_face(nodes[p.y]);
-      if (!cs_faces_adjacent(faces, fa, fb)) CS_EMIT(pairs, (uint2)(fa, fb));
-      CS_FRONT_EMIT(p);
-    } else if (live) {
-      /* The pair the search starts from overlaps, as tested above; testing its boxes
-       * again cost the front update a tenth (H100: cloth-ball 0.40 -> 0.36 ms, n-body
-       * 0.56 -> 0.48). One a work-item: the list holds them all. */
-      waiting[atomic_inc(&waiting_count)] = cs_waiting(p, p.x != p.y);
-    }
+    int2 placed = (int2)(0, 0), search = (int2)(0, 0);
+    uint2 face_pair = (uint2)(0, 0);
+    const int does = cs_front_start(front[s], nodes, node_boxes, faces, cap, &placed, &face_pair, &search);
+    if (does & CS_EMITS_FACES) CS_EMIT(pairs, face_pair);
+    if (does & CS_EMITS_FRONT) CS_FRONT_EMIT(placed);
+    /* One a work-item: the list holds them all. */
+    if (does & CS_SEARCHES) waiting[atomic_inc(&waiting_count)] = search;
   }
 #if CS_LOOP_TRIPS
   /* Every work-item counts the group's rounds alike, so that all of them leave the
@@ -219,35 +290,12 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
         break;
       }
 #endif
-      const int2 w = stack[--top];
-      const int overlap_known = w.x < 0;
-      const int2 q = overlap_known ? (int2)(-1 - w.x, w.y) : w;
-      const int2 a = nodes[q.x], b = nodes[q.y];
-      const uint level = (uint)(cs_node_depth(a) + cs_node_depth(b));
-      const int in_front = CS_KEEP_FRONT && level <= cap;
-      int2 children[3];
-      int k = 0;
-      if (q.x == q.y) {
-        if (a.x < 0) continue;
-        if (in_front && cap - level < 2) CS_FRONT_EMIT(q);
-        children[0] = (int2)(a.x, a.x);
-        children[1] = (int2)(a.x + 1, a.x + 1);
-        children[2] = (int2)(a.x, a.x + 1);
-        k = 3;
-      } else if (!overlap_known &&
-                 !cs_dop_overlap(node_boxes + CS_DOP_FLOATS * q.x, node_boxes + CS_DOP_FLOATS * q.y)) {
-        if (in_front) CS_FRONT_EMIT(q);
-      } else if (a.x < 0 && b.x < 0) {
-        const uint fa = (uint)cs_node_face(a), fb = (uint)cs_node_face(b);
-        if (!cs_faces_adjacent(faces, fa, fb)) CS_EMIT(pairs, (uint2)(fa, fb));
-        if (in_front) CS_FRONT_EMIT(q);
-      } else {
-        if (in_front && level == cap) CS_FRONT_EMIT(q);
-        const int first = cs_descends_first(a, b);
-        children[0] = first ? (int2)(a.x, q.y) : (int2)(q.x, b.x);
-        children[1] = first ? (int2)(a.x + 1, q.y) : (int2)(q.x, b.x + 1);
-        k = 2;
-      }
+      int2 children[3], placed;
+      uint2 face_pair = (uint2)(0, 0);
+      int emits;
+      const int k = cs_search_visit(stack[--top], nodes, node_boxes, faces, cap, children, &placed, &face_pair, &emits);
+      if (emits & CS_EMITS_FACES) CS_EMIT(pairs, face_pair);
+      if (emits & CS_EMITS_FRONT) CS_FRONT_EMIT(placed);
       for (int j = 0; j < k; ++j) {
         const uint at = atomic_inc(&waiting_count);
         if (at < CS_SHARED_SEARCH) waiting[at] = children[j];

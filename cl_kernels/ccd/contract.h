@@ -52,20 +52,17 @@ inline int cs_block_inverse(const real jm[3][3], const real cof[3][3], real y[3]
   return 1;
 }
 
-/* Narrows *b to its intersection with K. Returns 0 when that is empty: F misses S on
- * the box. */
-inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real separation)
+/* Every sum of non-negative terms below is rounded, and is at most ten roundings deep:
+ * CS_CONTRACT_GROW covers that; the CS_TINY terms cover products flushed to zero. */
+#define CS_CONTRACT_GROW ((real)1 + (real)32 * CS_EPS)
+
+/* F over the box of centre `mid`, radii `rad` and upper corner `hi`, as a middle and a
+ * radius: its value at the centre (fm, fr, the radius widened by the separation) and
+ * its slopes (jm, jr). */
+inline void cs_contract_linearise(const cs_trilinear* f, const real mid[3], const real rad[3], const real hi[3],
+                                  const real separation, real fm[3], real fr[3], real jm[3][3], real jr[3][3])
 {
-  const real lo[3] = {b->t0, b->u0, b->v0}, hi[3] = {b->t1, b->u1, b->v1};
-  real mid[3], rad[3];
-  for (int i = 0; i < 3; ++i) {
-    mid[i] = (real)0.5 * (lo[i] + hi[i]);
-    rad[i] = cs_up(fmax(hi[i] - mid[i], mid[i] - lo[i]));
-  }
-  /* Every sum of non-negative terms below is rounded, and is at most ten roundings
-   * deep: `grow` covers that; the CS_TINY terms cover products flushed to zero. */
-  const real grow = (real)1 + (real)32 * CS_EPS;
-  real fm[3], fr[3], jm[3][3], jr[3][3];
+  const real grow = CS_CONTRACT_GROW;
   for (int k = 0; k < 3; ++k) {
     fm[k] = cs_trilinear_at(f, k, mid[0], mid[1], mid[2], &fr[k]);
     fr[k] += separation;
@@ -79,7 +76,53 @@ inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real se
     jr[k][1] = (rad[0] * fabs(D) + f->w[2][k] + hi[0] * f->w[3][k]) * grow + (real)8 * CS_TINY;
     jr[k][2] = (rad[0] * fabs(G) + f->w[4][k] + hi[0] * f->w[5][k]) * grow + (real)8 * CS_TINY;
   }
+}
 
+/* Row i of K: where (I - Y J)(X - c) over a box symmetric about c, |I - Y J| row i times
+ * the radii, and Y F(c) put X. Each entry of I - Y J is its computed middle, within
+ * 8 CS_EPS of the size of its terms, plus |Y| times J's radii. */
+inline void cs_contract_row(const int i, const real y[3][3], const real jm[3][3], const real jr[3][3],
+                            const real fm[3], const real fr[3], const real mid[3], const real rad[3], real* k_lo,
+                            real* k_hi)
+{
+  real spread = 0;
+  for (int j = 0; j < 3; ++j) {
+    real entry = i == j ? (real)1 : (real)0, size = entry, reach = 0;
+    for (int k = 0; k < 3; ++k) {
+      const real p = y[i][k] * jm[k][j];
+      entry -= p;
+      size += fabs(p);
+      reach += fabs(y[i][k]) * jr[k][j];
+    }
+    spread += (fabs(entry) + reach + (real)8 * CS_EPS * size) * rad[j];
+  }
+  real step = 0, step_size = 0, step_reach = 0;
+  for (int k = 0; k < 3; ++k) {
+    const real p = y[i][k] * fm[k];
+    step += p;
+    step_size += fabs(p);
+    step_reach += fabs(y[i][k]) * fr[k];
+  }
+  const real at = mid[i] - step;
+  const real radius = (spread + step_reach + (real)8 * CS_EPS * step_size + (real)2 * CS_EPS * fabs(at)) *
+                          CS_CONTRACT_GROW +
+                      (real)64 * CS_TINY;
+  *k_lo = cs_down(at - radius);
+  *k_hi = cs_up(at + radius);
+}
+
+/* Narrows *b to its intersection with K. Returns 0 when that is empty: F misses S on
+ * the box. */
+inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real separation)
+{
+  const real lo[3] = {b->t0, b->u0, b->v0}, hi[3] = {b->t1, b->u1, b->v1};
+  real mid[3], rad[3];
+  for (int i = 0; i < 3; ++i) {
+    mid[i] = (real)0.5 * (lo[i] + hi[i]);
+    rad[i] = cs_up(fmax(hi[i] - mid[i], mid[i] - lo[i]));
+  }
+  real fm[3], fr[3], jm[3][3], jr[3][3];
+  cs_contract_linearise(f, mid, rad, hi, separation, fm, fr, jm, jr);
   const real cof[3][3] = {{jm[1][1] * jm[2][2] - jm[1][2] * jm[2][1], jm[1][2] * jm[2][0] - jm[1][0] * jm[2][2],
                            jm[1][0] * jm[2][1] - jm[1][1] * jm[2][0]},
                           {jm[0][2] * jm[2][1] - jm[0][1] * jm[2][2], jm[0][0] * jm[2][2] - jm[0][2] * jm[2][0],
@@ -107,31 +150,8 @@ inline int cs_trilinear_contract(const cs_trilinear* f, cs_box* b, const real se
   real narrow_lo[3], narrow_hi[3];
   for (;;) {
     for (int i = 0; i < 3; ++i) {
-      /* (I - Y J)(X - c) over a box symmetric about c: |I - Y J| row i times the radii.
-       * Each entry is its computed middle, within 8 CS_EPS of the size of its terms,
-       * plus |Y| times J's radii. */
-      real spread = 0;
-      for (int j = 0; j < 3; ++j) {
-        real entry = i == j ? (real)1 : (real)0, size = entry, reach = 0;
-        for (int k = 0; k < 3; ++k) {
-          const real p = y[i][k] * jm[k][j];
-          entry -= p;
-          size += fabs(p);
-          reach += fabs(y[i][k]) * jr[k][j];
-        }
-        spread += (fabs(entry) + reach + (real)8 * CS_EPS * size) * rad[j];
-      }
-      real step = 0, step_size = 0, step_reach = 0;
-      for (int k = 0; k < 3; ++k) {
-        const real p = y[i][k] * fm[k];
-        step += p;
-        step_size += fabs(p);
-        step_reach += fabs(y[i][k]) * fr[k];
-      }
-      const real at = mid[i] - step;
-      const real radius =
-          (spread + step_reach + (real)8 * CS_EPS * step_size + (real)2 * CS_EPS * fabs(at)) * grow + (real)64 * CS_TINY;
-      const real k_lo = cs_down(at - radius), k_hi = cs_up(at + radius);
+      real k_lo, k_hi;
+      cs_contract_row(i, y, jm, jr, fm, fr, mid, rad, &k_lo, &k_hi);
       narrow_lo[i] = lo[i];
       narrow_hi[i] = hi[i];
       if (!isfinite(k_lo) || !isfinite(k_hi)) continue; /* Y too large to say anything along i */

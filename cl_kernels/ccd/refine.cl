@@ -232,6 +232,39 @@ inline int cs_guess_box(const real q[24], const cs_query* query, const int verte
   return 1;
 }
 
+/* The query's first boxes span the times at which its points may be coplanar (the
+ * whole step with a minimum separation): their runs, of which it returns how many. A
+ * query that is never coplanar gets none. use_filter: the screen ran in float, and the
+ * non-penetration filter runs here in the refinement's precision (ccd_graph.cpp), on the
+ * same coefficients. */
+inline int cs_first_times(const cs_query* query, const uint vertex_face, const real separation, const uint use_filter,
+                          real lo[CS_COPLANAR_RUNS], real hi[CS_COPLANAR_RUNS])
+{
+  lo[0] = 0;
+  hi[0] = 1;
+  if (separation != 0) return 1;
+  cs_interval c[4];
+  cs_coplanarity_cubic(query, (int)vertex_face, c);
+  return use_filter && cs_cubic_keeps_sign(c) ? 0 : cs_coplanar_times(c, lo, hi);
+}
+
+#if CS_EARLIEST_ACROSS
+/* Before any round, and again when the list overflowed and the search starts over:
+ * contacts found by a cut-short search must not give up queries. Every store is the
+ * same value; the test keeps most of them off the few objects' words. `first_start`:
+ * round 0's first box's start. */
+inline void cs_seed_earliest(__global uint* first, const uint first_start, const uint2 o, __global uint* found)
+{
+  first[0] = first[1] = CS_NO_TIME;
+  first[2] = first_start;
+  for (int k = 0; k < 2; ++k) {
+    const uint object = k ? o.y : o.x;
+    if (found[2 * object] != CS_NO_TIME) found[2 * object] = CS_NO_TIME;
+    if (found[2 * object + 1] != 0xffffffffu) found[2 * object + 1] = 0xffffffffu;
+  }
+}
+#endif
+
 __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, __global cs_item* list,
                              __global uint* counts, const uint capacity)
 {
@@ -247,20 +280,9 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   real q[24];
   cs_vertex_points(s.vertices, x0, x1, q);
   const cs_query query = cs_points_query(q, exact_input);
-  /* The query's first boxes span the times at which its points may be coplanar (the
-   * whole step with a minimum separation); a query that is never coplanar gets one box
-   * after the step, which round 0 drops. use_filter: the screen ran in float, and the
-   * non-penetration filter runs here in the refinement's precision (ccd_graph.cpp), on
-   * the same coefficients. */
   real lo[CS_COPLANAR_RUNS], hi[CS_COPLANAR_RUNS];
-  int runs = 1;
-  lo[0] = 0;
-  hi[0] = 1;
-  if (separation == 0) {
-    cs_interval c[4];
-    cs_coplanarity_cubic(&query, (int)pair.z, c);
-    runs = use_filter && cs_cubic_keeps_sign(c) ? 0 : cs_coplanar_times(c, lo, hi);
-  }
+  /* A query that is never coplanar gets one box after the step, which round 0 drops. */
+  const int runs = cs_first_times(&query, pair.z, separation, use_filter, lo, hi);
   cs_item root;
   root.query = i;
   root.work = 0;
@@ -276,20 +298,9 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
     if (at < capacity) list[at] = more;
   }
 #if CS_EARLIEST_ACROSS
-  /* Before any round, and again when the list overflowed and the search starts over:
-   * contacts found by a cut-short search must not give up queries. Every store is the
-   * same value; the test keeps most of them off the few objects' words. */
-  if (earliest_only) {
-    __global uint* first = cs_first_starts(state, n, i);
-    first[0] = first[1] = CS_NO_TIME;
-    first[2] = runs ? cs_float_key_down(lo[0]) : CS_NO_TIME; /* round 0's: the first box's */
-    const uint2 o = cs_query_objects(&s, vertex_object);
-    for (int k = 0; k < 2; ++k) {
-      const uint object = k ? o.y : o.x;
-      if (found[2 * object] != CS_NO_TIME) found[2 * object] = CS_NO_TIME;
-      if (found[2 * object + 1] != 0xffffffffu) found[2 * object + 1] = 0xffffffffu;
-    }
-  }
+  if (earliest_only)
+    cs_seed_earliest(cs_first_starts(state, n, i), runs ? cs_float_key_down(lo[0]) : CS_NO_TIME,
+                     cs_query_objects(&s, vertex_object), found);
 #endif
 #if CS_KEEP_FUNCTION
   s.f = cs_points_trilinear(q, pair.z, exact_input);
@@ -318,6 +329,76 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   state[i] = s;
 }
 
+/* Round `round`'s visit of a box of a query whose state was `seen`, `work` boxes into
+ * its search and `last_splits` of them halved last round: its function made (kept, or
+ * again from the points), the work limits applied (past them the box answers
+ * "collision" at its start, cs_visit_box), and the finer cuts of the late rounds. */
+inline int cs_round_visit(const cs_refine_state* seen, const cs_box box, const uint round, const uint work,
+                          const uint last_splits, __global const real* x0, __global const real* x1,
+                          const uint exact_input, const real tolerance, const real separation,
+                          const uint max_iterations, const real before, int* slack, int* limited, real* t,
+                          cs_box* lo, cs_box* hi, cs_cuts* cuts)
+{
+  const int vertex_face = (seen->flags & CS_FLAG_VERTEX_FACE) != 0;
+#if CS_KEEP_FUNCTION
+  const cs_trilinear f = seen->f;
+  const real scale = seen->scale;
+#else
+  real points[24];
+  cs_vertex_points(seen->vertices, x0, x1, points);
+  const cs_trilinear f = cs_points_trilinear(points, (uint)vertex_face, exact_input);
+  const real scale = cs_points_scale(points, exact_input);
+#endif
+  const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
+  const int levels =
+      round >= CS_CUT_FINER_FROM && last_splits << CS_FINER_HALVINGS <= CS_MOST_BOXES / 2 ? CS_FINER_HALVINGS : 1;
+  return cs_visit_box(&f, box, vertex_face, tolerance * scale, tolerance, separation, before, out_of_work, levels,
+                      slack, limited, t, lo, hi, cuts);
+}
+
+/* The boxes a visit leaves into the next round's list: its two halves, the narrowed box,
+ * or the pieces of a cut. */
+inline void cs_round_store(__local uint* group, __global uint* counts, const uint round, const uint capacity,
+                           const int visit, const cs_item lo, const cs_item hi, const cs_cuts cuts,
+                           __global cs_item* out)
+{
+  const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : visit == CS_BOX_CUT ? cs_pieces(cuts) : 0u;
+  const uint at = cs_worklist_append(group, counts, round, boxes);
+  if (visit == CS_BOX_CUT) {
+    for (uint j = 0; j < boxes; ++j)
+      if (cs_worklist_fits(counts, capacity, at + j)) {
+        cs_item piece = lo;
+        piece.box = cs_piece(lo.box, cuts, j);
+        out[at + j] = piece;
+      }
+  } else {
+    if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
+    if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
+  }
+}
+
+#if CS_EARLIEST_ACROSS
+/* In earliest-only mode, after a visit: the next round's first start reset, the first
+ * start of the boxes it leaves (lo, or the one cut, starts no later), and a contact's
+ * time for its objects. */
+inline void cs_round_earliest(__global uint* first, const uint round, const int visit, const real lo_start,
+                              const real t, const cs_refine_state* seen, __global const uint* vertex_object,
+                              volatile __global uint* found)
+{
+  first[(round + 1) % 3] = CS_NO_TIME;
+  if (visit >= CS_BOX_SPLIT) {
+    const uint start = cs_float_key_down(lo_start);
+    if (start < first[round % 3]) atomic_min(&first[round % 3], start);
+  }
+  if (visit == CS_BOX_HIT) {
+    const uint2 o = cs_query_objects(seen, vertex_object);
+    const uint key = cs_float_key_up(t);
+    cs_found_at(found, o.x, key, round);
+    cs_found_at(found, o.y, key, round);
+  }
+}
+#endif
+
 __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state, __global const cs_item* in,
                               __global cs_item* out, __global uint* counts, const uint round, const uint capacity)
 {
@@ -339,7 +420,6 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const real before = cs_time_of(seen.best[1 - now]);
       const uint last_splits = seen.work[(round + 2) % 3]; /* this round's boxes, halved */
       const uint work = it.work + last_splits;
-      const int vertex_face = (seen.flags & CS_FLAG_VERTEX_FACE) != 0;
       int slack = 0, limited = 0;
       real t = before;
 #if CS_EARLIEST_ACROSS
@@ -350,23 +430,9 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const int given_up = 0;
 #endif
       /* Not a box after the step: the seed's of a query that is never coplanar. */
-      if (!given_up && it.box.t0 <= 1) {
-#if CS_KEEP_FUNCTION
-        const cs_trilinear f = seen.f;
-        const real scale = seen.scale;
-#else
-        real points[24];
-        cs_vertex_points(seen.vertices, x0, x1, points);
-        const cs_trilinear f = cs_points_trilinear(points, (uint)vertex_face, exact_input);
-        const real scale = cs_points_scale(points, exact_input);
-#endif
-        const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
-        const int levels = round >= CS_CUT_FINER_FROM && last_splits << CS_FINER_HALVINGS <= CS_MOST_BOXES / 2
-                               ? CS_FINER_HALVINGS
-                               : 1;
-        visit = cs_visit_box(&f, it.box, vertex_face, tolerance * scale, tolerance, separation, before, out_of_work,
-                             levels, &slack, &limited, &t, &lo.box, &hi.box, &cuts);
-      }
+      if (!given_up && it.box.t0 <= 1)
+        visit = cs_round_visit(&seen, it.box, round, work, last_splits, x0, x1, exact_input, tolerance, separation,
+                               max_iterations, before, &slack, &limited, &t, &lo.box, &hi.box, &cuts);
       cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       /* After the visit: issued before it, this store to a word that every box of the
        * query writes made cloth-ball's refinement a third slower in single precision. */
@@ -378,35 +444,11 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
         lo.work = hi.work = work;
       }
 #if CS_EARLIEST_ACROSS
-      if (earliest_only) {
-        first[(round + 1) % 3] = CS_NO_TIME;
-        /* Of the boxes, lo (or the one cut) starts no later. */
-        if (visit >= CS_BOX_SPLIT) {
-          const uint start = cs_float_key_down(lo.box.t0);
-          if (start < first[round % 3]) atomic_min(&first[round % 3], start);
-        }
-        if (visit == CS_BOX_HIT) {
-          const uint2 o = cs_query_objects(&seen, vertex_object);
-          const uint key = cs_float_key_up(t);
-          cs_found_at(found, o.x, key, round);
-          cs_found_at(found, o.y, key, round);
-        }
-      }
+      if (earliest_only)
+        cs_round_earliest(first, round, visit, lo.box.t0, t, &seen, vertex_object, found);
 #endif
     }
-    const uint boxes = visit == CS_BOX_SPLIT ? 2u : visit == CS_BOX_NARROW ? 1u : visit == CS_BOX_CUT ? cs_pieces(cuts) : 0u;
-    const uint at = cs_worklist_append(group, counts, round, boxes);
-    if (visit == CS_BOX_CUT) {
-      for (uint j = 0; j < boxes; ++j)
-        if (cs_worklist_fits(counts, capacity, at + j)) {
-          cs_item piece = lo;
-          piece.box = cs_piece(lo.box, cuts, j);
-          out[at + j] = piece;
-        }
-    } else {
-      if (boxes > 0 && cs_worklist_fits(counts, capacity, at)) out[at] = lo;
-      if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
-    }
+    cs_round_store(group, counts, round, capacity, visit, lo, hi, cuts, out);
   }
   cs_worklist_check_loops(counts, round);
 }

@@ -167,6 +167,42 @@ inline real cs_most4(const real4 x)
 inline real cs_least8(const real8 x) { return cs_least4(fmin(x.lo, x.hi)); }
 inline real cs_most8(const real8 x) { return cs_most4(fmax(x.lo, x.hi)); }
 
+/* Whether direction d separates rigorously: d.F stays farther than `separation` times
+ * |d|_1 from zero at every corner of the box (value and error as cs_trilinear_bounds_of
+ * takes them). The corners go four at a time (cs_trilinear_bounds_of says why). */
+inline int cs_direction_separates(real d0, real d1, real d2, const real8 value[3], const real8 error[3],
+                                  const real separation)
+{
+  /* Scaled to a largest component of 1: any direction is as valid, and products with
+   * tiny directions would otherwise fall into subnormals (slow on CPUs). */
+  const real largest = fmax(fabs(d0), fmax(fabs(d1), fabs(d2)));
+  if (!(largest > CS_TINY * (real)0x1p24) || !isfinite(largest)) return 0;
+  d0 /= largest;
+  d1 /= largest;
+  d2 /= largest;
+  const real a0 = fabs(d0), a1 = fabs(d1), a2 = fabs(d2);
+  const real norm1 = a0 + a1 + a2;
+  real lo = CS_REAL_MAX, hi = -CS_REAL_MAX;
+  for (int side = 0; side < 2; ++side) {
+    const real4 v0 = side ? value[0].hi : value[0].lo, v1 = side ? value[1].hi : value[1].lo,
+                v2 = side ? value[2].hi : value[2].lo;
+    const real4 r0 = side ? error[0].hi : error[0].lo, r1 = side ? error[1].hi : error[1].lo,
+                r2 = side ? error[2].hi : error[2].lo;
+    const real4 dot = d0 * v0 + d1 * v1 + d2 * v2;
+    /* d.F at a corner differs from dot by the inputs' share, sum |d_k| error_k, and the
+     * dot product's own rounding, under 2 CS_EPS sum |d_k value_k|; the margin's own
+     * five roundings are covered by the factor. */
+    const real4 margin = (a0 * (r0 + (real)2 * CS_EPS * fabs(v0)) + a1 * (r1 + (real)2 * CS_EPS * fabs(v1)) +
+                          a2 * (r2 + (real)2 * CS_EPS * fabs(v2))) *
+                             ((real)1 + (real)8 * CS_EPS) +
+                         (real)8 * CS_TINY;
+    lo = fmin(lo, cs_least4(dot - margin));
+    hi = fmax(hi, cs_most4(dot + margin));
+  }
+  const real reach = cs_up(separation * cs_up(norm1));
+  return cs_down(lo) > reach || cs_up(hi) < -reach;
+}
+
 /* Bounds F over the box b from its values and error bounds at b's corners
  * (cs_trilinear_corners: component c of value[k] is F_k at corner c). Returns 0 when
  * F certainly stays farther than `separation` from zero there: along the coordinate
@@ -234,37 +270,10 @@ inline int cs_trilinear_bounds_of(const cs_trilinear* f, const cs_box b, const r
   n[0] = e1[1] * e2[2] - e1[2] * e2[1];
   n[1] = e1[2] * e2[0] - e1[0] * e2[2];
   n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-  for (int which = 0; which < 2; ++which) {
-    real d0 = which ? n[0] : centre[0], d1 = which ? n[1] : centre[1], d2 = which ? n[2] : centre[2];
-    /* Scaled to a largest component of 1: any direction is as valid, and products with
-     * tiny directions would otherwise fall into subnormals (slow on CPUs). */
-    const real largest = fmax(fabs(d0), fmax(fabs(d1), fabs(d2)));
-    if (!(largest > CS_TINY * (real)0x1p24) || !isfinite(largest)) continue;
-    d0 /= largest;
-    d1 /= largest;
-    d2 /= largest;
-    const real a0 = fabs(d0), a1 = fabs(d1), a2 = fabs(d2);
-    const real norm1 = a0 + a1 + a2;
-    real lo = CS_REAL_MAX, hi = -CS_REAL_MAX;
-    for (int side = 0; side < 2; ++side) {
-      const real4 v0 = side ? value[0].hi : value[0].lo, v1 = side ? value[1].hi : value[1].lo,
-                  v2 = side ? value[2].hi : value[2].lo;
-      const real4 r0 = side ? error[0].hi : error[0].lo, r1 = side ? error[1].hi : error[1].lo,
-                  r2 = side ? error[2].hi : error[2].lo;
-      const real4 dot = d0 * v0 + d1 * v1 + d2 * v2;
-      /* d.F at a corner differs from dot by the inputs' share, sum |d_k| error_k, and
-       * the dot product's own rounding, under 2 CS_EPS sum |d_k value_k|; the margin's
-       * own five roundings are covered by the factor. */
-      const real4 margin = (a0 * (r0 + (real)2 * CS_EPS * fabs(v0)) + a1 * (r1 + (real)2 * CS_EPS * fabs(v1)) +
-                            a2 * (r2 + (real)2 * CS_EPS * fabs(v2))) *
-                               ((real)1 + (real)8 * CS_EPS) +
-                           (real)8 * CS_TINY;
-      lo = fmin(lo, cs_least4(dot - margin));
-      hi = fmax(hi, cs_most4(dot + margin));
-    }
-    const real reach = cs_up(separation * cs_up(norm1));
-    if (cs_down(lo) > reach || cs_up(hi) < -reach) return 0;
-  }
+  for (int which = 0; which < 2; ++which)
+    if (cs_direction_separates(which ? n[0] : centre[0], which ? n[1] : centre[1], which ? n[2] : centre[2], value,
+                               error, separation))
+      return 0;
   return 1;
 }
 
