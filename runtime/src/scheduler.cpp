@@ -139,7 +139,13 @@ ListHost Scheduler::State::list_host(const PassState& p)
                   tl(),
                   counters.device(),
                   counters.list_counts(*p.list),
-                  [this](const std::function<void()>& allocate) { scratch.with_memory(allocate); },
+                  [this](Buffer& buffer, std::size_t& at, std::size_t bytes, const char* label) {
+                    scratch.take_stage_scratch(buffer, at, bytes, label);
+                  },
+                  [this](Buffer& buffer, std::size_t& at) {
+                    scratch.drop_stage_scratch(buffer, at);
+                    buffer = Buffer();
+                  },
                   [this, &p](const Kernel& k) { return bind_own_args(bindings(), *p.spec, k); },
                   p.spec->worklist->extra_state_bytes > 0 && nonzero(p.spec->worklist->extra_state_while),
                   stats.readbacks};
@@ -249,7 +255,10 @@ void Scheduler::State::start_run()
     p.atomic_this_run = false;
     p.handed_over = false;
     p.ran = false;
-    if (p.list) p.list->restart();
+    if (p.list) {
+      p.list->restart();
+      p.list->held_bytes = 0;
+    }
     for (auto& e : p.emitters) {
       e.segment_bytes = 0;
       e.exact_plan = false;

@@ -149,26 +149,77 @@ TEST_CASE("a work list's counts come back with its stage's counters, and rounds 
 }
 
 // An optional mode's state (refine.cl's earliest box starts, kept only for steps that
-// report earliest times alone) costs nothing while the mode is off.
+// report earliest times alone) costs nothing while the mode is off. In the step arena the
+// state goes back with its stage, so a run without the mode holds none of it again;
+// without the arena it is held from run to run, as the lists are, until memory runs short.
 TEST_CASE("a work list holds its extra state only while its parameter is set", "[runtime][scheduler][worklist][quick]")
 {
   auto& ctx = cstreams::test::device();
   const std::size_t n = 3001;
-  StreamGraph g;
-  const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0);
-  Scheduler s(ctx, g);
-  const auto v = random_values(n, 29);
-  s.upload(tree_streams.values, v);
-  const auto run = [&](cl_uint deepest) {
-    s.set(tree_streams.deepest, deepest);
+  for (const bool arena : {true, false}) {
+    INFO((arena ? "in the step arena" : "without the step arena"));
+    StreamGraph g;
+    const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0);
+    Scheduler s(ctx, g, {Registration::segmented_lock, true, arena});
+    const auto v = random_values(n, 29);
+    s.upload(tree_streams.values, v);
+    const auto run = [&](cl_uint deepest) {
+      s.set(tree_streams.deepest, deepest);
+      s.run();
+      CHECK(sorted(s.download<Pair>(tree_streams.counted)) == tree_counts(v, deepest != 0));
+      return s.stats().passes.at(0).scratch_bytes;
+    };
+    run(0);  // the list grows to its size
+    const std::size_t without = run(0);
+    CHECK(run(1) == without + 4 * n);
+    CHECK(run(0) == (arena ? without : without + 4 * n));
+  }
+}
+
+// In the step arena a work list's state and lists take the place of what an earlier
+// stage held and gave back (here an expansion's segments, in the stage before the list's
+// pass, which reads its output), so a settled run holds less than one whose lists are
+// buffers of their own, and counts the same. Each on a context of its own, so that what
+// is in use is the scheduler's.
+TEST_CASE("a work list in the step arena takes the place an earlier stage gave back",
+          "[runtime][scheduler][worklist][quick]")
+{
+  const std::size_t n = 2000, m = 200000;
+  const auto v = random_values(n, 31), w = random_values(m, 37);
+  const auto settled = [&](bool arena) {
+    Context own(filter_from_environment());
+    own.programs().add_sources(test_kernel_sources());
+    StreamGraph g;
+    const StreamId values = g.fixed("values", 4, n), more = g.fixed("more", 4, m);
+    const StreamId pairs = g.variable("pairs", 8, 16), counted = g.variable("counted", 8, 16);
+    const ParamId deepest = g.param("deepest", 4);
+    g.pass("expand", {program, "test_expand"}).launch_over(more).emit(pairs).arg(buffer_of(more)).arg(count_of(more));
+    Worklist list{"test_tree_seed", "test_tree_round", 8, 4, 2 * own.work_group_size(), 0};
+    g.pass("tree", {program, "test_tree_finish"})
+        .launch_over(values)
+        .read(pairs)
+        .refine(list)
+        .emit(counted)
+        .arg(buffer_of(values))
+        .arg(count_of(values))
+        .arg(param_of(deepest));
+    Scheduler s(own, g, {Registration::segmented_lock, true, arena});
+    s.upload(values, v);
+    s.upload(more, w);
+    s.set(deepest, cl_uint(0));
+    for (int frame = 0; frame < 4; ++frame) s.run();
+    own.reset_memory_high_water();
     s.run();
-    CHECK(sorted(s.download<Pair>(tree_streams.counted)) == tree_counts(v, deepest != 0));
-    return s.stats().passes.at(0).scratch_bytes;
+    CHECK(sorted(s.download<Pair>(counted)) == tree_counts(v, false));
+    CHECK(sorted(s.download<Pair>(pairs)) == sorted(cstreams::test::reference(w).pairs));
+    const std::size_t list_bytes = s.stats().passes.at(1).scratch_bytes;
+    return std::pair{own.memory_high_water(), list_bytes};
   };
-  run(0);  // the list grows to its size
-  const std::size_t without = run(0);
-  CHECK(run(1) == without + 4 * n);
-  CHECK(run(0) == without + 4 * n);  // held, as the state is, until memory runs short
+  const auto [with, list_bytes] = settled(true);
+  const std::size_t without = settled(false).first;
+  INFO("high water with the arena " << with << ", without " << without << "; the work list held " << list_bytes);
+  // The list's memory is shared but for what it holds beyond the segments' place.
+  CHECK(with + list_bytes / 2 < without);
 }
 
 // Short of memory for its lists, a work list runs in slices of its inputs; its

@@ -53,6 +53,15 @@ void Scratch::drop_stage_scratch(Buffer& buffer, std::size_t& at)
   buffer = Buffer();
 }
 
+void Scratch::drop_list(ListState& l)
+{
+  if (l.state_at == StepArena::none && l.lists_at[0] == StepArena::none && l.lists_at[1] == StepArena::none) return;
+  drop_stage_scratch(l.state, l.state_at);
+  for (int k = 0; k < 2; ++k) drop_stage_scratch(l.lists[k], l.lists_at[k]);
+  l.released = std::max(l.released, l.capacity);
+  l.capacity = 0;
+}
+
 void Scratch::stage_done(const std::vector<PassState*>& stage)
 {
   std::vector<std::size_t> needs;
@@ -63,6 +72,7 @@ void Scratch::stage_done(const std::vector<PassState*>& stage)
         give_back_segments(e);
       }
     drop_stage_scratch(p->keep, p->keep_at);
+    if (p->list) drop_list(*p->list);
   }
   pool_.stage_done(std::move(needs));
 }
@@ -105,6 +115,7 @@ void Scratch::release_pass(PassState& p, bool& freed)
       freed = true;
     }
   if (auto& l = p.list) {
+    drop_list(*l);
     release(l->state);
     for (auto& list : l->lists) release(list);
     l->released = std::max(l->released, l->capacity);
@@ -120,6 +131,7 @@ void Scratch::start_run()
     for (auto& e : p.emitters)
       if (e.arena_at != StepArena::none || e.counts_at != StepArena::none) drop_segments(e);
     drop_stage_scratch(p.keep, p.keep_at);
+    if (p.list) drop_list(*p.list);
   }
   for (auto& st : streams_.all())
     if (st.arena_at != StepArena::none || (use_arena_ && st.transient && st.buffer)) {

@@ -1,6 +1,6 @@
 #pragma once
 // Memory that lives within a run apart from the streams: registration segments with
-// their counts, a stage's scratch (cull flags), the step arena they come from while
+// their counts, a stage's scratch (cull flags, work lists), the step arena they come from while
 // memory lasts, and the idle segments kept between stages without it; and what goes
 // back when the device runs short. Owns taking and giving back that memory and the
 // switch from the arena to buffers held pass by pass; not how streams change size
@@ -52,6 +52,9 @@ public:
   // with the stage's segments; without it, held from run to run.
   void take_stage_scratch(Buffer& buffer, std::size_t& at, std::size_t bytes, const char* label);
   void drop_stage_scratch(Buffer& buffer, std::size_t& at);
+  // A work list's state and lists that came from the arena go back; the next run takes
+  // lists as large as these were (ListState::released).
+  void drop_list(ListState& l);
   // After a stage's counters are read and nothing of it overflowed.
   void stage_done(const std::vector<PassState*>& stage);
 

@@ -2,6 +2,7 @@
 
 #include "../step_arena.hpp"
 
+#include <algorithm>
 #include <map>
 #include <string>
 
@@ -27,13 +28,18 @@ void collect_stats(RunStats& stats, const RunFigures& figures)
     p.stats.device_ns = by_label[p.spec->name];
     pass_total += p.stats.device_ns;
     p.stats.scratch_bytes = p.keep.bytes();
-    if (p.list) p.stats.scratch_bytes += p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes();
+    const std::size_t list_bytes =
+        p.list ? p.list->state.bytes() + p.list->lists[0].bytes() + p.list->lists[1].bytes() : 0;
+    p.stats.scratch_bytes += list_bytes;
     for (const auto& e : p.emitters) {
       p.stats.scratch_bytes += e.counts.bytes() + e.offsets.bytes() + e.plan.bytes();
       p.stats.segment_bytes += e.segment_bytes;
     }
     stats.scratch_bytes += p.stats.scratch_bytes;
     p.stats.scratch_bytes += p.stats.segment_bytes;
+    // A work list taken from the arena went back with its stage, into the arena's bytes:
+    // the pass reports what it held.
+    if (p.list) p.stats.scratch_bytes += p.list->held_bytes - std::min(p.list->held_bytes, list_bytes);
     stats.passes.push_back(p.stats);
   }
   stats.scratch_bytes += stats.segment_bytes;

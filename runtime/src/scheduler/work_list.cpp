@@ -7,20 +7,32 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 namespace cstreams::runtime {
 
 namespace {
 
+void note_held(ListState& l)
+{
+  l.held_bytes = std::max(l.held_bytes, l.state.bytes() + l.lists[0].bytes() + l.lists[1].bytes());
+}
+
+void give_back_lists(ListState& l, ListHost& host)
+{
+  l.capacity = 0;
+  for (int k = 0; k < 2; ++k) host.give_back(l.lists[k], l.lists_at[k]);
+}
+
 void allocate_lists(ListState& l, std::size_t items, std::size_t item_bytes, ListHost& host)
 {
   // The old memory goes back before more is taken; a failed allocation leaves no
   // capacity that the buffers do not have.
-  l.capacity = 0;
-  for (auto& list : l.lists) list = Buffer();
-  for (auto& list : l.lists)
-    host.with_memory([&] { list = Buffer(host.context, std::max<std::size_t>(items, 1) * item_bytes, "work list"); });
+  give_back_lists(l, host);
+  for (int k = 0; k < 2; ++k)
+    host.take(l.lists[k], l.lists_at[k], std::max<std::size_t>(items, 1) * item_bytes, "work list");
   l.capacity = items;
+  note_held(l);
 }
 
 // Grows the lists to `items`, keeping the first `kept` items of lists[keep]: the input
@@ -30,13 +42,15 @@ void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigne
                 ListHost& host)
 {
   Buffer input = std::move(l.lists[keep]);
+  std::size_t input_at = std::exchange(l.lists_at[keep], StepArena::none);
   l.capacity = 0;
-  l.lists[0] = l.lists[1] = Buffer();
-  host.with_memory([&] { l.lists[keep] = Buffer(host.context, items * item_bytes, "work list"); });
+  host.give_back(l.lists[1 - keep], l.lists_at[1 - keep]);
+  host.take(l.lists[keep], l.lists_at[keep], items * item_bytes, "work list");
   host.context.copy(input, l.lists[keep], kept * item_bytes, 0, 0, host.timeline);
-  input = Buffer();
-  host.with_memory([&] { l.lists[1 - keep] = Buffer(host.context, items * item_bytes, "work list"); });
+  host.give_back(input, input_at);
+  host.take(l.lists[1 - keep], l.lists_at[1 - keep], items * item_bytes, "work list");
   l.capacity = items;
+  note_held(l);
 }
 
 // After a run's rounds (or a slice's, `widest` the most any round of the run held so
@@ -44,12 +58,11 @@ void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigne
 // the next run takes lists of that size, so that a detector held for many steps holds
 // what its steps need. Lists grow to no more than twice what their run needed, so a
 // run like the last keeps them.
-void keep_needed_lists(ListState& l, std::size_t widest, std::size_t item_bytes)
+void keep_needed_lists(ListState& l, std::size_t widest, std::size_t item_bytes, ListHost& host)
 {
   const std::size_t needed = grown(widest);
   if (l.capacity <= 2 * needed || l.capacity * item_bytes <= kept_list_bytes) return;
-  l.lists[0] = l.lists[1] = Buffer();
-  l.capacity = 0;
+  give_back_lists(l, host);
   l.released = needed;
 }
 
@@ -68,16 +81,17 @@ void refine(const PassSpec& spec, ListState& l, PassStats& stats, std::size_t n,
     const std::size_t state_bytes = w.state_bytes + (host.extra_state ? w.extra_state_bytes : 0);
     const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
     // A state far larger than this run's goes back too (keep_needed_lists).
-    if (l.state.bytes() > 2 * state_needed + kept_list_bytes) l.state = Buffer();
-    host.with_memory([&] { ensure_capacity(host.context, l.state, state_needed, "work list state"); });
+    if (l.state.bytes() > 2 * state_needed + kept_list_bytes) host.give_back(l.state, l.state_at);
+    host.take(l.state, l.state_at, state_needed, "work list state");
     if (n == 0) {
-      keep_needed_lists(l, 0, w.item_bytes);
+      keep_needed_lists(l, 0, w.item_bytes, host);
       return;
     }
     // Lists taken by memory pressure come back at their size, not at one that the
     // rounds would overflow again.
     if (l.capacity < n) allocate_lists(l, std::max(grown(n), l.released), w.item_bytes, host);
     l.released = 0;
+    note_held(l);
   }
   std::uint32_t* const counts = host.counts;
   do {
@@ -141,7 +155,7 @@ bool settle_list(const PassSpec& spec, ListState& l, PassStats& stats, ListHost&
     stats.rounds += counts[7];
     stats.list_items += std::uint64_t(counts[4]) | std::uint64_t(counts[5]) << 32;
     stats.widest_list = std::max<std::size_t>(stats.widest_list, counts[6]);
-    keep_needed_lists(l, stats.widest_list, w.item_bytes);
+    keep_needed_lists(l, stats.widest_list, w.item_bytes, host);
     l.reseed = true;
     return true;
   }

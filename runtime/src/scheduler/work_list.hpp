@@ -3,8 +3,10 @@
 // its seed and the batches of rounds that run until a round leaves nothing, growing the
 // lists where a round overflows them. It owns those buffers and the batching; it may not
 // touch other passes, streams or the scheduler's counters beyond its own words: it
-// allocates, binds the pass's own arguments and counts its reads through ListHost,
+// takes memory, binds the pass's own arguments and counts its reads through ListHost,
 // which the run loop lends it (runtime/src/scheduler.cpp). Private to the runtime.
+#include "../step_arena.hpp"
+
 #include <cstreams/runtime/buffer.hpp>
 #include <cstreams/runtime/kernel.hpp>
 #include <cstreams/runtime/scheduler.hpp>
@@ -32,6 +34,12 @@ struct ListState {
   Kernel seed, round;
   Buffer state;
   Buffer lists[2];  // ping-pong: round r reads lists[r % 2] and appends to the other
+  // Their places in the step arena, where the run takes them from it: the stage gives
+  // them back once its counters are read, so that the next stages' memory, and the
+  // stages' before, share theirs (ListHost::take).
+  std::size_t state_at = StepArena::none;
+  std::size_t lists_at[2] = {StepArena::none, StepArena::none};
+  std::size_t held_bytes = 0;  // the most the state and lists held at once this run
   // cl_kernels/runtime/worklist.h's counts[list_words]: words of the scheduler's
   // counters from `counts_at`, so that they start a run cleared with them, with nothing
   // written before the seed, and come back with the stage's counter read rather than in
@@ -73,8 +81,12 @@ struct ListHost {
   Timeline* timeline;                  // profiling, or none
   const Buffer& counters;              // the run's counters, the list's words among them
   std::uint32_t* counts;               // its words as the last counter read brought them
-  std::function<void(const std::function<void()>&)> with_memory;  // allocates, making room if need be
-  std::function<unsigned(const Kernel&)> bind_own_args;           // the pass's arguments; the next index
+  // A buffer of at least `bytes` for the list's state or a list: from the step arena
+  // while the run uses it (`at` its place), else a buffer of its own, kept from run to
+  // run; making room if need be. And one given back.
+  std::function<void(Buffer&, std::size_t&, std::size_t, const char*)> take;
+  std::function<void(Buffer&, std::size_t&)> give_back;
+  std::function<unsigned(const Kernel&)> bind_own_args;  // the pass's arguments; the next index
   bool extra_state;                    // the optional mode's state is held this run
   unsigned& readbacks;                 // the run's blocking reads
 };
