@@ -58,7 +58,7 @@ void Scratch::drop_list(ListState& l)
   if (l.state_at == StepArena::none && l.lists_at[0] == StepArena::none && l.lists_at[1] == StepArena::none) return;
   drop_stage_scratch(l.state, l.state_at);
   for (int k = 0; k < 2; ++k) drop_stage_scratch(l.lists[k], l.lists_at[k]);
-  l.released = std::max(l.released, l.capacity);
+  l.released = std::max(l.released, l.needed > 0 ? std::min(l.needed, l.capacity) : l.capacity);
   l.capacity = 0;
 }
 

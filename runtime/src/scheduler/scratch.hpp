@@ -53,7 +53,8 @@ public:
   void take_stage_scratch(Buffer& buffer, std::size_t& at, std::size_t bytes, const char* label);
   void drop_stage_scratch(Buffer& buffer, std::size_t& at);
   // A work list's state and lists that came from the arena go back; the next run takes
-  // lists as large as these were (ListState::released).
+  // lists for what this one's widest round needed (ListState::released): taken anew
+  // from the arena each run, they need not keep what doubling on a replay gave them.
   void drop_list(ListState& l);
   // After a stage's counters are read and nothing of it overflowed.
   void stage_done(const std::vector<PassState*>& stage);

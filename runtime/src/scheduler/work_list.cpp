@@ -57,10 +57,14 @@ void grow_lists(ListState& l, std::size_t items, std::size_t item_bytes, unsigne
 // far): lists more than twice what it needed (a burst that has passed) go back, and
 // the next run takes lists of that size, so that a detector held for many steps holds
 // what its steps need. Lists grow to no more than twice what their run needed, so a
-// run like the last keeps them.
+// run like the last keeps them. Lists taken anew each run (from the step arena) take
+// `needed`: in a sequence whose rounds widen step by step (a cloth settling on a
+// sphere), what the last step outgrew the one before by, twice, saves a replay a step.
 void keep_needed_lists(ListState& l, std::size_t widest, std::size_t item_bytes, ListHost& host)
 {
   const std::size_t needed = grown(widest);
+  l.needed = needed + 2 * (widest - std::min(widest, l.widest));
+  l.widest = widest;
   if (l.capacity <= 2 * needed || l.capacity * item_bytes <= kept_list_bytes) return;
   give_back_lists(l, host);
   l.released = needed;

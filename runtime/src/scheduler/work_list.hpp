@@ -50,6 +50,9 @@ struct ListState {
   bool counts_clear = false;  // the counts hold zeros: a seed may start
   std::size_t capacity = 0;
   std::size_t released = 0;  // the capacity the lists had when memory pressure took them
+  // What the next run's lists should hold: the last settled run's widest round with
+  // slack, and twice what it outgrew the run before by (widest, that run's).
+  std::size_t needed = 0, widest = 0;
   // The rounds the last runs needed, the next run's first batch the most of them: a run
   // that needs more than its first batch has its pass emit twice (refine()), and the
   // rounds of steps in a row go up and down by one or two (300 bodies: 13-17), where an
