@@ -49,7 +49,9 @@ struct ListState {
   Buffer counts, next_counts;
   bool counts_clear = false;  // the counts hold zeros: a seed may start
   std::size_t capacity = 0;
-  std::size_t released = 0;  // the capacity the lists had when memory pressure took them
+  // What the next run's lists take at least: the capacity memory pressure took, or where
+  // the lists went back with their stage to the arena, what the next run needs.
+  std::size_t released = 0;
   // What the next run's lists should hold: the last settled run's widest round with
   // slack, and twice what it outgrew the run before by (widest, that run's).
   std::size_t needed = 0, widest = 0;
