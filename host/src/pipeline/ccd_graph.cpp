@@ -57,6 +57,14 @@ namespace {
 using ContactStreams = std::vector<std::pair<runtime::StreamId, ContactKind>>;
 using Sized = std::function<std::size_t(std::size_t)>;
 
+// Whether the conservative screen runs in float on inputs rounded outward: in double
+// precision, where the graph has the positions in float too (TestInputs::x0_float). The
+// refinement then runs the non-penetration filter the screen left out.
+bool screens_in_float(const TestInputs& in, const SolverOptions& solver)
+{
+  return solver.precision == Precision::double_ && in.x0_float != runtime::StreamId{};
+}
+
 // The cubic solver's one pass over every candidate stream.
 void add_cubic_test(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver,
                     const std::string& options, const ContactStreams& contacts)
@@ -94,11 +102,12 @@ runtime::StreamId add_conservative_screen(runtime::StreamGraph& g, const TestInp
 {
   using namespace runtime;
   const StreamId open = g.variable("open queries", 16, sized(1024));
-  const bool in_float = solver.precision == Precision::double_ && in.x0_float != StreamId{};
+  const bool in_float = screens_in_float(in, solver);
   SolverOptions float_solver = solver;
   float_solver.precision = Precision::single;
+  const std::string screen_options = in_float ? solver_build_options(float_solver) : options;
   auto& test = g.pass(in_float ? "test candidates in float" : "test candidates",
-                      {"ccd/narrow_phase_pairs.cl", "cs_screen_pairs", in_float ? solver_build_options(float_solver) : options})
+                      {"ccd/narrow_phase_pairs.cl", "cs_screen_pairs", screen_options})
                    .emit(open)
                    // The refinement answers each query on its own, so it takes them
                    // in any order.
@@ -132,7 +141,7 @@ void add_refinement(runtime::StreamGraph& g, const TestInputs& in, const SolverO
   // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
   // 256 (BENCHMARKS.md).
   constexpr std::size_t refine_group = 64;
-  const bool in_float = solver.precision == Precision::double_ && in.x0_float != StreamId{};
+  const bool in_float = screens_in_float(in, solver);
   const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
   runtime::Worklist boxes{"cs_refine_seed",
                           "cs_refine_round",

@@ -64,8 +64,7 @@ ContactReadback::ContactReadback(runtime::Context& context, const SceneLayout& l
   for (std::size_t o = 0; o < first_vertex.size(); ++o) first_vertex[o] = layout.slots[layout.slot_of[o]].first_vertex;
   first_vertex_ = runtime::Buffer(context, first_vertex.size() * sizeof(cl_uint), "first vertex of each object");
   context.write(first_vertex_, first_vertex.data(), first_vertex.size() * sizeof(cl_uint));
-  std::size_t faces = 0;
-  for (const auto& object : scene.objects) faces += object.faces.size();
+  const std::size_t faces = layout.topology.faces.size();
   runtime::ensure_capacity(context, staging_,
                            std::min(most_reserved_bytes, reserved_contacts_a_face * faces * sizeof(Contact)), "contacts");
 }
