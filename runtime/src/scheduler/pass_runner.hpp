@@ -1,7 +1,7 @@
 #pragma once
 // What the parts that execute passes again (Flush, which reruns what overflowed; Slices,
 // which runs the rest of a graph slice by slice) ask of the run loop, which owns
-// executing a pass and the stages (scheduler.cpp). Private to the runtime.
+// executing a pass and the stages (run_loop.cpp). Private to the runtime.
 #include "states.hpp"
 #include "work_list.hpp"
 

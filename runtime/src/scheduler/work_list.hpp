@@ -4,7 +4,7 @@
 // lists where a round overflows them. It owns those buffers and the batching; it may not
 // touch other passes, streams or the scheduler's counters beyond its own words: it
 // takes memory, binds the pass's own arguments and counts its reads through ListHost,
-// which the run loop lends it (runtime/src/scheduler.cpp). Private to the runtime.
+// which the run loop lends it (scheduler/run_loop.cpp). Private to the runtime.
 #include "../step_arena.hpp"
 
 #include <cstreams/runtime/buffer.hpp>
