@@ -2,6 +2,7 @@
 // scene is read, device opened or file written.
 #include "../support/benchmark_data.hpp"
 #include "../support/scratch.hpp"
+#include "cli_driver.hpp"
 
 #include <commands.hpp>
 #include <inputs.hpp>
@@ -24,49 +25,6 @@
 #include <vector>
 
 namespace fs = std::filesystem;
-
-namespace {
-
-// Parses `args` (after the program name); returns the error text, empty if accepted.
-// `ran` tells whether a command was produced.
-std::string parse(std::vector<std::string> args, bool* ran = nullptr)
-{
-  auto cli = cstreams::cli::make_command_line();
-  args.insert(args.begin(), "cstreams");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  std::string error;
-  try {
-    cli->app.parse(int(argv.size()), argv.data());
-  } catch (const CLI::ParseError& e) {
-    error = e.get_name() + ": " + e.what();
-  } catch (const cstreams::InputError& e) {
-    error = e.what();
-  }
-  if (ran) *ran = bool(cli->command);
-  if (error.empty() && !cli->command) error = "no command";
-  return error;
-}
-
-std::string funnel_frame(const char* name)
-{
-  return cstreams::test::benchmark_path(std::string("scalable-ccd-sample/cloth-funnel/frames/") + name);
-}
-
-fs::path fresh_dir(const char* name) { return cstreams::test::fresh_scratch(name); }
-
-// Parses and runs a command line as the program would.
-void execute(std::vector<std::string> args)
-{
-  auto cli = cstreams::cli::make_command_line();
-  args.insert(args.begin(), "cstreams");
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  cli->app.parse(int(argv.size()), argv.data());
-  cli->command();
-}
-
-}  // namespace
 
 TEST_CASE("numeric flags out of range are refused before any work, naming the flag and the range", "[cli][quick]")
 {

@@ -1,0 +1,63 @@
+#pragma once
+// Arrays as simulators hold them (ipc-toolkit's conventions): positions an Eigen matrix
+// of #V rows and 3 columns, double or float; faces #F x 3 and edges #E x 2 of integer
+// indices. Either storage order. Each is checked as it is copied, and an InputError
+// names the argument, the row and what was wrong.
+#include <cstreams/geometry/mesh.hpp>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace cstreams {
+
+namespace details {
+[[noreturn]] void throw_bad_shape(const char* name, std::ptrdiff_t rows, std::ptrdiff_t cols, std::size_t want_rows,
+                                  std::size_t want_cols);
+[[noreturn]] void throw_not_finite(const char* name, std::ptrdiff_t row);
+[[noreturn]] void throw_bad_index(const char* name, std::ptrdiff_t row, long long index, std::size_t vertices);
+}  // namespace details
+
+// Copies positions V (#V x 3; `rows` of them where rows > 0) in double. Every
+// coordinate must be finite and within float's range, which the device computes in.
+template <typename Derived>
+std::vector<Vec3> positions_from(const Eigen::MatrixBase<Derived>& V, const char* name, std::size_t rows = 0)
+{
+  static_assert(std::is_floating_point_v<typename Derived::Scalar>, "positions are float or double");
+  if (V.cols() != 3 || (rows > 0 && std::size_t(V.rows()) != rows)) details::throw_bad_shape(name, V.rows(), V.cols(), rows, 3);
+  std::vector<Vec3> out(std::size_t(V.rows()));
+  constexpr double largest = std::numeric_limits<float>::max();
+  for (Eigen::Index i = 0; i < V.rows(); ++i) {
+    const Vec3 x(double(V(i, 0)), double(V(i, 1)), double(V(i, 2)));
+    if (!(std::abs(x[0]) <= largest && std::abs(x[1]) <= largest && std::abs(x[2]) <= largest))
+      details::throw_not_finite(name, i);
+    out[std::size_t(i)] = x;
+  }
+  return out;
+}
+
+// Copies index rows of `Width` columns (faces 3, edges 2), each index below `vertices`.
+template <std::size_t Width, typename Derived>
+std::vector<std::array<std::uint32_t, Width>> indices_from(const Eigen::MatrixBase<Derived>& I, const char* name,
+                                                           std::size_t vertices)
+{
+  static_assert(std::is_integral_v<typename Derived::Scalar>, "indices are integers");
+  if (std::size_t(I.cols()) != Width) details::throw_bad_shape(name, I.rows(), I.cols(), 0, Width);
+  std::vector<std::array<std::uint32_t, Width>> out(std::size_t(I.rows()));
+  for (Eigen::Index i = 0; i < I.rows(); ++i)
+    for (std::size_t k = 0; k < Width; ++k) {
+      const long long v = static_cast<long long>(I(i, Eigen::Index(k)));
+      if (v < 0 || static_cast<unsigned long long>(v) >= vertices) details::throw_bad_index(name, i, v, vertices);
+      out[std::size_t(i)][k] = std::uint32_t(v);
+    }
+  return out;
+}
+
+}  // namespace cstreams
