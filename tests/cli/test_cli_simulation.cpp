@@ -43,3 +43,28 @@ TEST_CASE("stepsize refuses bad flags and mismatched frames, naming them", "[cli
   const std::string other = cstreams::test::benchmark_path("scalable-ccd-sample/rod-twist/frames/3036.ply");
   CHECK_THROWS_WITH(execute({"stepsize", a, other}), Catch::StartsWith(other + ": has"));
 }
+
+TEST_CASE("proximity counts the close pairs of a mesh and writes them", "[cli][quick]")
+{
+  const auto dir = fresh_dir("cstreams-cli-proximity");
+  const std::string a = funnel_frame("227.ply");
+  execute({"proximity", a, "--dhat", "0.002", "--relative", "--repeat", "1", "--json", (dir / "p.json").string(),
+           "--out", (dir / "p.csv").string()});
+  const auto j = nlohmann::json::parse(std::ifstream(dir / "p.json"));
+  const std::size_t pairs = j["pairs"].get<std::size_t>();
+  CHECK(pairs > 0);
+  std::size_t by_kind = 0;
+  for (const auto& [closest, count] : j["by_closest_features"].items()) by_kind += count.get<std::size_t>();
+  CHECK(by_kind == pairs);
+  CHECK(j["smallest_distance"].get<double>() < j["dhat"].get<double>());
+  std::ifstream csv(dir / "p.csv");
+  std::size_t lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  CHECK(lines == pairs + 1);
+
+  bool ran = true;
+  CHECK_THAT(parse({"proximity", a, "--dhat", "0"}, &ran), Catch::StartsWith("--dhat = 0: must be"));
+  CHECK(!ran);
+  CHECK_THAT(parse({"proximity", a}), Catch::Contains("--dhat"));
+  CHECK_THAT(parse({"proximity", a, "--dhat", "1", "--out", "/nonexistent/p.csv"}), Catch::StartsWith("--out"));
+}

@@ -14,6 +14,7 @@ std::unique_ptr<CommandLine> make_command_line()
   add_run_command(cli->app, cli->command);
   add_compare_command(cli->app, cli->command);
   add_stepsize_command(cli->app, cli->command);
+  add_proximity_command(cli->app, cli->command);
   return cli;
 }
 

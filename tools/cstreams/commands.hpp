@@ -31,6 +31,7 @@ void add_accuracy_command(CLI::App& app, Command& command);
 void add_run_command(CLI::App& app, Command& command);
 void add_compare_command(CLI::App& app, Command& command);
 void add_stepsize_command(CLI::App& app, Command& command);
+void add_proximity_command(CLI::App& app, Command& command);
 
 // A manifest or mesh file, or several mesh files as the frames of one mesh.
 Scene open_scene(const std::vector<std::string>& paths, bool split);

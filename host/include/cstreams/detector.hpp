@@ -18,6 +18,7 @@
 // end to the next one without a copy.
 #include <cstreams/contacts.hpp>
 #include <cstreams/pipeline/narrow_phase.hpp>
+#include <cstreams/proximity.hpp>
 #include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 #include <cstreams/scene/scene.hpp>
@@ -65,8 +66,18 @@ struct SceneDescription {
 // A loaded scene's objects at one of its frames.
 SceneDescription describe(const Scene& scene, std::size_t frame = 0);
 
+// What a detector's steps look for.
+enum class Detects {
+  contacts,    // along each object's motion from its start to its end positions (CCD)
+  close_pairs  // pairs closer than DetectorOptions::dhat at the end positions (starts unread)
+};
+
 struct DetectorOptions {
   SolverOptions solver;  // elementary tests: solver, precision, tolerance, minimum separation
+  Detects detects = Detects::contacts;
+  // Proximity: the distance (units of the positions) below which a pair is reported.
+  // Distances are computed in the solver's precision.
+  double dhat = 0;
   FrontMode front = FrontMode::exact;
   // Deferred front: device memory for the front (both of its buffers), in MiB.
   double front_budget_mb = 16;
@@ -160,6 +171,8 @@ public:
   // Per object, the earliest time of impact in the last step (1 without contact),
   // rounded down to float.
   std::vector<double> earliest_toi() const;
+  // The last step's pairs closer than dhat (Detects::close_pairs), in canonical order.
+  const std::vector<ClosePair>& close_pairs() const;
   // The last step's feature pairs before the elementary tests, as the host reference
   // lays them out. A step that ran in slices to fit the device's memory
   // (stats().run.slices > 1) kept only its last slice's, and this throws.

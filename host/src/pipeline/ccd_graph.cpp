@@ -209,7 +209,7 @@ constexpr const char* broad_phase_program = "ccd/broad_phase.cl";
 struct GraphBuilder {
   GraphBuilder(const SceneLayout& layout, const DetectorOptions& options)
       : l(layout), solver(options.solver), options(options), t(layout.topology),
-        exact_input(solver.precision == Precision::double_), separation(float_above(solver.min_separation))
+        exact_input(solver.precision == Precision::double_), separation(float_above(bounds_margin(options)))
   {
   }
 
@@ -222,6 +222,10 @@ struct GraphBuilder {
   CcdGraph out;
   runtime::StreamGraph& g = out.graph;
   CcdStreams& s = out.streams;
+
+  // Where the motion the broad phase sweeps starts: a proximity query has no motion,
+  // and its boxes and culls take the end positions at both ends.
+  runtime::StreamId start() const { return options.detects == Detects::close_pairs ? s.x1 : s.x0; }
 
   // Expected sizes only; every variable stream grows as its counter demands.
   std::size_t sized(std::size_t guess) const { return options.initial_capacity ? options.initial_capacity : guess; }
@@ -259,7 +263,7 @@ struct GraphBuilder {
         .launch_items(l.moving_faces + l.moving_edges)
         .update(s.node_boxes)
         .write(s.edge_boxes)
-        .arg(buffer_of(s.x0))
+        .arg(buffer_of(start()))
         .arg(buffer_of(s.x1))
         .arg(buffer_of(s.faces))
         .arg(buffer_of(s.edges))
@@ -335,7 +339,7 @@ struct GraphBuilder {
     };
     if (PassSpec* cull = cull_orphans("orphan vf", "orphan vf candidates", l.orphans.vf.size(),
                                       "cs_cull_vertex_face_pairs", s.orphan_vf, s.kept_vf))
-      cull->arg(buffer_of(s.x0))
+      cull->arg(buffer_of(start()))
           .arg(buffer_of(s.x1))
           .arg(value_of(separation))
           .arg(buffer_of(s.face_words))
@@ -391,10 +395,19 @@ struct GraphBuilder {
         .arg(buffer_of(s.faces))
         .arg(buffer_of(s.face_edges))
         .arg(buffer_of(s.face_words))
-        .arg(buffer_of(s.x0))
+        .arg(buffer_of(start()))
         .arg(buffer_of(s.x1))
         .arg(value_of(separation))
         .arg(value_of(float_above(solver.tolerance)));
+  }
+
+  // The broad phase's candidate streams, the orphans' where there are some.
+  ContactStreams candidate_streams() const
+  {
+    ContactStreams out = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
+    if (s.kept_vf != runtime::StreamId{}) out.emplace_back(s.kept_vf, ContactKind::vertex_face);
+    if (s.kept_ee != runtime::StreamId{}) out.emplace_back(s.kept_ee, ContactKind::edge_edge);
+    return out;
   }
 
   // The elementary tests of every candidate stream, each emitting its contacts.
@@ -408,9 +421,7 @@ struct GraphBuilder {
     in.exact_floats = s.exact_floats;
     in.faces = s.faces;
     in.edges = s.edges;
-    in.candidates = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
-    if (s.kept_vf != runtime::StreamId{}) in.candidates.emplace_back(s.kept_vf, ContactKind::vertex_face);
-    if (s.kept_ee != runtime::StreamId{}) in.candidates.emplace_back(s.kept_ee, ContactKind::edge_edge);
+    in.candidates = candidate_streams();
     s.vertex_object = g.fixed("vertex objects", 4, t.vertex_count);
     s.earliest_only = g.param("earliest only", 4);
     s.earliest = g.fixed("earliest toi", 4, l.slots.size());
@@ -423,6 +434,22 @@ struct GraphBuilder {
       in.object_contacts = s.object_contacts;
     }
     s.contacts = add_elementary_tests(g, in, solver, device, [this](std::size_t guess) { return sized(guess); });
+  }
+
+  // Proximity instead of the tests: the distance of every candidate pair, one pass over
+  // every candidate stream (proximity.cl), in double where the solver's precision is.
+  void close_pairs()
+  {
+    using namespace runtime;
+    s.close_pairs = g.variable("close pairs", 16, sized(1024));
+    const ContactStreams candidates = candidate_streams();
+    auto& pass = g.pass("close pairs", {"ccd/proximity.cl", "cs_close_pairs", solver_build_options(solver)})
+                     .emit(s.close_pairs)
+                     .emits_in_any_order()
+                     .expect_items(0.25);
+    over_streams(pass, candidates, "the proximity query");
+    pass.arg(buffer_of(exact_input ? s.x1_double : s.x1)).arg(buffer_of(s.faces)).arg(buffer_of(s.edges));
+    real_arg(pass, options.dhat, solver.precision);
   }
 
   // The earliest time of impact per object, in the steps that report nothing else:
@@ -452,6 +479,11 @@ struct GraphBuilder {
 
 }  // namespace
 
+double bounds_margin(const DetectorOptions& options)
+{
+  return options.detects == Detects::close_pairs ? options.dhat : options.solver.min_separation;
+}
+
 GraphDevice graph_device(const runtime::Context& context)
 {
   GraphDevice on;
@@ -479,8 +511,11 @@ CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& optio
   RefitPlan refit = plan_refit(layout, device.work_group_size);
   b.bounds_and_refit(device.work_group_size, refit);
   b.out.refit_ranges = std::move(refit.ranges);
-  if (!layout.seeds.empty()) {
-    b.broad_phase(front_size, device);
+  if (layout.seeds.empty()) return std::move(b.out);
+  b.broad_phase(front_size, device);
+  if (options.detects == Detects::close_pairs) {
+    b.close_pairs();
+  } else {
     b.elementary_tests(device);
     b.earliest_toi();
   }

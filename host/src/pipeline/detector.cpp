@@ -1,3 +1,4 @@
+#include "close_pair_readback.hpp"
 #include "contact_readback.hpp"
 #include "feature_ids.hpp"
 #include "front_control.hpp"
@@ -94,7 +95,7 @@ bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
 // scheduler running its graph, and the last step's results.
 struct Detector::State {
   State(runtime::Context& device, SceneDescription s, const DetectorOptions& o)
-      : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, o.solver.min_separation)),
+      : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, bounds_margin(o))),
         front(o, layout, 4 * device.device().compute_units * device.work_group_size(), device.work_group_size(),
               device.loop_trip_limit() != 0),
         ids(layout), readback(device, layout, scene, o.solver.precision)
@@ -104,7 +105,7 @@ struct Detector::State {
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});
-    start_exact = end_exact = upload_scene(*scheduler, g, layout, scene, options.solver.min_separation);
+    start_exact = end_exact = upload_scene(*scheduler, g, layout, scene, bounds_margin(options));
     scheduler->on_counter_read([this] {
       start_uploads_ahead();
       queue_uploads_ahead(false);
@@ -126,6 +127,7 @@ struct Detector::State {
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
   ContactSpan contacts;  // in the readback's host memory
+  std::vector<ClosePair> close;  // a proximity query's
   // Per object, whether its positions at the step's start and end are floats: where all
   // are, the step's float kernels take them as the exact input (CcdStreams::exact_floats).
   std::vector<bool> start_exact, end_exact;
@@ -383,6 +385,7 @@ runtime::Context& checked_device(runtime::Context& device, const DetectorOptions
 {
   check_solver_options(device, options.solver);
   check_option("DetectorOptions::front_budget_mb", options.front_budget_mb, option_ranges::front_budget_mb);
+  if (options.detects == Detects::close_pairs) check_option("DetectorOptions::dhat", options.dhat, option_ranges::dhat);
   device.programs().add_sources(ccd_kernel_sources());
   return device;
 }
@@ -455,7 +458,8 @@ void Detector::run_step(Report report)
   s.context.reset_memory_high_water();
   s.given.queue(*s.scheduler);
   const CcdStreams& st = s.streams;
-  s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
+  // A proximity query has no times of impact.
+  if (s.options.detects == Detects::contacts) s.scheduler->set(st.earliest_only, cl_uint(report == Report::earliest_toi));
   const auto all = [](const std::vector<bool>& v) { return std::find(v.begin(), v.end(), false) == v.end(); };
   s.scheduler->set(st.exact_floats, cl_uint(all(s.start_exact) && all(s.end_exact)));
   s.have_earliest = false;
@@ -476,7 +480,10 @@ void Detector::run_step(Report report)
     if (s.options.front != FrontMode::none && has(st.front)) q.swap(st.front, st.next_front);
     s.end_step();
   };
-  if (report == Report::contacts) {
+  if (s.options.detects == Detects::close_pairs) {
+    after_run();
+    if (has(st.close_pairs)) read_close_pairs(q, st.close_pairs, s.layout, s.ids, s.close);
+  } else if (report == Report::contacts) {
     runtime::PassStats readback;
     std::vector<runtime::Timeline::Entry> commands;
     s.contacts = s.readback.read(q, st, s.options.profile, readback, commands, after_run);
@@ -500,6 +507,13 @@ void Detector::run_step(Report report)
   stats.launches = unsigned(s.context.kernel_launches() - launches);
   stats.blocking_reads = unsigned(s.context.blocking_reads() - reads);
   stats.host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+}
+
+const std::vector<ClosePair>& Detector::close_pairs() const
+{
+  state_->check_usable();
+  if (state_->options.detects != Detects::close_pairs) throw Error("close_pairs() needs a detector made for Detects::close_pairs");
+  return state_->close;
 }
 
 ContactSpan Detector::contacts() const

@@ -94,7 +94,8 @@ std::vector<bool> upload_scene(runtime::Scheduler& q, const CcdGraph& g, const S
   q.write(s.face_edges, 0, t.face_edges.data(), t.face_edges.size());
   if (has(s.orphan_vf)) q.write(s.orphan_vf, 0, layout.orphans.vf.data(), layout.orphans.vf.size());
   if (has(s.orphan_ee)) q.write(s.orphan_ee, 0, layout.orphans.ee.data(), layout.orphans.ee.size());
-  q.write(s.vertex_object, 0, layout.vertex_object.data(), layout.vertex_object.size());
+  // The tests' and the contacts' (a proximity query has neither).
+  if (has(s.vertex_object)) q.write(s.vertex_object, 0, layout.vertex_object.data(), layout.vertex_object.size());
   return exact;
 }
 

@@ -32,6 +32,7 @@ struct CcdStreams {
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
   runtime::StreamId earliest;
   runtime::StreamId object_contacts;  // refine.cl's `found`: per object, the earliest contact so far
+  runtime::StreamId close_pairs;  // proximity: (vertex_face << 4 | type, a, b, distance bits)
   runtime::ParamId level_cap;
   runtime::ParamId earliest_only;     // 1: the step reports only each object's earliest time
   runtime::ParamId exact_floats;      // 1: the float positions are the input itself (no rounding)
@@ -96,6 +97,10 @@ std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
     runtime::StreamGraph& g, const TestInputs& inputs, const SolverOptions& solver, const GraphDevice& device,
     const std::function<std::size_t(std::size_t)>& sized, bool mark_limits = false);
 
+// How far the broad phase's boxes reach beyond their features: the minimum separation
+// of a contact, or a proximity query's dhat.
+double bounds_margin(const DetectorOptions& options);
+
 struct CcdGraph {
   runtime::StreamGraph graph;
   CcdStreams streams;
@@ -105,6 +110,8 @@ struct CcdGraph {
 // The CCD stream graph of one scene: swept bounds and refit for moving objects only,
 // the front update (or search from fixed seeds), the decomposition, the orphan culls
 // for self-colliding objects, the elementary tests, and the earliest time per object.
+// A proximity query's graph sweeps from the end positions to themselves and ends with
+// the distances of the candidate pairs instead of the tests.
 CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& options, std::size_t front_size,
                          const GraphDevice& device = {});
 

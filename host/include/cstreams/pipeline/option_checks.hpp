@@ -21,6 +21,7 @@ inline constexpr OptionRange max_iterations{1, 4294967295.0};
 inline constexpr OptionRange front_budget_mb{0, 1 << 20, true, false};
 inline constexpr OptionRange memory_budget_mb{0, 1 << 30, true, false};
 inline constexpr OptionRange tmax{0, 1, true, false};
+inline constexpr OptionRange dhat{0, 1e30, true, false};
 inline constexpr OptionRange conservative_rescaling{0, 1, true, true};
 }  // namespace option_ranges
 
