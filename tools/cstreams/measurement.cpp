@@ -130,6 +130,15 @@ void check(const MeasureOptions& o)
   parse_step_range(o.frames);
 }
 
+void print_passes(const DetectorStats& stats)
+{
+  std::printf("\ndevice time per pass in the last call (ms):\n");
+  for (const auto& p : stats.run.passes)
+    std::printf("  %-44s %9.3f  (%u launches)\n", p.name.c_str(), double(p.device_ns) * 1e-6, p.launches);
+  std::printf("  %-44s %9.3f\n  %-44s %9.3f\n", "all passes", double(stats.device_ns()) * 1e-6, "call (host wall time)",
+              stats.host_ms);
+}
+
 double median(std::vector<double> v)
 {
   if (v.empty()) return 0;

@@ -54,6 +54,9 @@ bool uploads_ahead(const MeasureOptions& o);
 
 double median(std::vector<double> v);
 
+// Each pass's device time in a detector's last step, for the commands' --passes.
+void print_passes(const DetectorStats& stats);
+
 // The tail of a run's per-step times, so that a hitch shows without a per-step table:
 // the 90th percentile (nearest rank) and the slowest step with its first frame. NaN
 // times (an untimed device) make every figure NaN.

@@ -32,6 +32,7 @@ struct ProximityOptions {
   double dhat = 0;
   bool relative = false;
   unsigned repeat = 11;
+  bool passes = false;
 };
 
 void check(const ProximityOptions& o)
@@ -84,16 +85,18 @@ void proximity(const ProximityOptions& o)
   runtime::Context context(o.device.empty() ? filter_from_environment() : o.device);
   MeshProximityOptions options;
   options.precision = parse_precision(o.precision);
+  options.profile = o.passes;
   MeshProximity proximity(context, CollisionMesh(m.positions, m.faces), options);
-  std::vector<ClosePair> pairs;
+  const std::vector<ClosePair>* found = nullptr;
   std::vector<double> ms;
   // The first call builds the front; the rest are a Newton iteration's warm calls.
   for (unsigned call = 0; call <= o.repeat; ++call) {
     const auto begin = std::chrono::steady_clock::now();
-    pairs = proximity.close_pairs(m.positions, dhat);
+    found = &proximity.close_pairs(m.positions, dhat);
     const std::chrono::duration<double, std::milli> took = std::chrono::steady_clock::now() - begin;
     if (call > 0) ms.push_back(took.count());
   }
+  const std::vector<ClosePair>& pairs = *found;
   std::map<std::string, std::size_t> by_closest;
   float smallest = std::numeric_limits<float>::infinity();
   for (const ClosePair& p : pairs) {
@@ -109,6 +112,7 @@ void proximity(const ProximityOptions& o)
   std::printf("\n");
   if (!pairs.empty()) std::printf("smallest  %.9g\n", double(smallest));
   std::printf("time      %.3f ms per call (median wall time of %u warm calls)\n", median(ms), o.repeat);
+  if (o.passes) print_passes(proximity.stats());
   if (!o.out.empty()) write_file_atomically(o.out, [&](std::ostream& out) { write_csv(out, pairs); });
   if (!o.json.empty()) {
     const nlohmann::json j{{"mesh", o.mesh},
@@ -140,6 +144,7 @@ void add_proximity_command(CLI::App& app, Command& command)
   cmd->add_option("--precision", o->precision, "double (single on a device without it) or single");
   cmd->add_option("--repeat", o->repeat, "Warm calls to time, after a first one");
   cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
+  cmd->add_flag("--passes,-v", o->passes, "Also print each pass's device time in the last call (times every call's passes)");
   cmd->add_option("--out", o->out, "Write the pairs as CSV");
   cmd->add_option("--json", o->json, "Write the counts and the calls' times as JSON");
   cmd->callback([o, &command] {

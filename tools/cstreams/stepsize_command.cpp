@@ -28,6 +28,7 @@ struct StepsizeOptions {
   double min_separation = 0, tolerance = CcdParameters{}.tolerance;
   double rescaling = default_conservative_rescaling;
   unsigned repeat = 11;
+  bool passes = false;
 };
 
 void check(const StepsizeOptions& o)
@@ -59,6 +60,7 @@ void stepsize(const StepsizeOptions& o)
   MeshCcdOptions options;
   options.solver = parse_solver(o.solver);
   options.precision = parse_precision(o.precision);
+  options.profile = o.passes;
   MeshCcd ccd(context, CollisionMesh(a.positions, a.faces), options);
   CcdParameters parameters;
   parameters.min_distance = o.min_separation;
@@ -84,6 +86,7 @@ void stepsize(const StepsizeOptions& o)
   else
     std::printf("step size %.9g: the step collides first at t = %.9g, rescaled by %g\n", alpha, toi, o.rescaling);
   std::printf("time      %.3f ms per call (median wall time of %u warm calls)\n", median(ms), o.repeat);
+  if (o.passes) print_passes(ccd.stats());
   if (!o.json.empty()) {
     const nlohmann::json j{{"mesh", o.start},
                            {"vertices", a.positions.size()},
@@ -120,6 +123,7 @@ void add_stepsize_command(CLI::App& app, Command& command)
   cmd->add_option("--precision", o->precision, "single or double");
   cmd->add_option("--repeat", o->repeat, "Warm calls to time, after a first one");
   cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
+  cmd->add_flag("--passes,-v", o->passes, "Also print each pass's device time in the last call (times every call's passes)");
   cmd->add_option("--json", o->json, "Write the result and the calls' times as JSON");
   cmd->callback([o, &command] {
     check(*o);

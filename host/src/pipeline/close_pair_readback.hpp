@@ -1,17 +1,40 @@
 #pragma once
 // A proximity step's pairs as the user gets them: the close-pairs stream read in one
-// transfer, its ids made local to their objects, in canonical order.
+// transfer into pinned memory, its ids made local to their objects, in canonical order.
+// Its host memory is kept from one step to the next, so that a step of as many pairs
+// as the last touches no fresh pages.
 #include "feature_ids.hpp"
 
 #include <cstreams/pipeline/scene_layout.hpp>
 #include <cstreams/proximity.hpp>
+#include <cstreams/runtime/host_staging.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
 #include <vector>
 
 namespace cstreams {
 
-void read_close_pairs(runtime::Scheduler& scheduler, runtime::StreamId close_pairs, const SceneLayout& layout,
-                      const FeatureIds& ids, std::vector<ClosePair>& out);
+class ClosePairReadback {
+public:
+  ClosePairReadback(runtime::Context& context, const SceneLayout& layout, const FeatureIds& ids)
+      : context_(context), layout_(layout), ids_(ids)
+  {
+  }
+
+  void read(const runtime::Scheduler& scheduler, runtime::StreamId close_pairs, std::vector<ClosePair>& out);
+
+  // A pair's place in canonical order (canonical_less): kind and objects, features.
+  struct Key {
+    std::uint64_t objects, features;
+    std::uint32_t index;
+  };
+
+private:
+  runtime::Context& context_;
+  const SceneLayout& layout_;
+  const FeatureIds& ids_;
+  runtime::HostStaging records_;  // proximity.cl's records as read
+  std::vector<Key> keys_, sorting_;
+};
 
 }  // namespace cstreams

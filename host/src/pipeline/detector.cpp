@@ -123,6 +123,7 @@ struct Detector::State {
   FrontControl front;
   FeatureIds ids;
   ContactReadback readback;
+  ClosePairReadback close_readback{context, layout, ids};
   PositionWrites given{context};  // set_positions() and set_step()'s
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
@@ -482,7 +483,7 @@ void Detector::run_step(Report report)
   };
   if (s.options.detects == Detects::close_pairs) {
     after_run();
-    if (has(st.close_pairs)) read_close_pairs(q, st.close_pairs, s.layout, s.ids, s.close);
+    if (has(st.close_pairs)) s.close_readback.read(q, st.close_pairs, s.close);
   } else if (report == Report::contacts) {
     runtime::PassStats readback;
     std::vector<runtime::Timeline::Entry> commands;

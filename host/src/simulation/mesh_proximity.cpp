@@ -49,7 +49,7 @@ MeshProximity::MeshProximity(runtime::Context& device, CollisionMesh mesh, MeshP
 
 MeshProximity::~MeshProximity() = default;
 
-std::vector<ClosePair> MeshProximity::close_pairs(const std::vector<Vec3>& V, double dhat)
+const std::vector<ClosePair>& MeshProximity::close_pairs(const std::vector<Vec3>& V, double dhat)
 {
   return state_->run(V, dhat, "dhat").close_pairs();
 }

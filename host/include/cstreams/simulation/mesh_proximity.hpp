@@ -33,12 +33,13 @@ public:
   MeshProximity(const MeshProximity&) = delete;
   MeshProximity& operator=(const MeshProximity&) = delete;
 
-  // Every vertex-face and edge-edge pair closer than dhat at V, in canonical order.
-  template <typename A> std::vector<ClosePair> close_pairs(const Eigen::MatrixBase<A>& V, double dhat)
+  // Every vertex-face and edge-edge pair closer than dhat at V, in canonical order:
+  // valid until the next call (copy them to keep them).
+  template <typename A> const std::vector<ClosePair>& close_pairs(const Eigen::MatrixBase<A>& V, double dhat)
   {
     return close_pairs(positions_from(V, "V", vertex_count()), dhat);
   }
-  std::vector<ClosePair> close_pairs(const std::vector<Vec3>& V, double dhat);
+  const std::vector<ClosePair>& close_pairs(const std::vector<Vec3>& V, double dhat);
 
   // The broad phase's pairs at V: vertex-face and edge-edge pairs whose features'
   // boxes come within `radius` of each other (boxes inflated by radius / 2 overlap,
