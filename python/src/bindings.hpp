@@ -8,5 +8,6 @@ namespace py = pybind11;
 
 void bind_simulation(py::module_& m);  // CollisionMesh's arrays, MeshCcd, MeshProximity
 void bind_detector(py::module_& m);    // scenes of objects and Detector
+void bind_queries(py::module_& m);     // query files and the elementary solvers
 
 }  // namespace cstreams::python

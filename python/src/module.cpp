@@ -115,4 +115,5 @@ PYBIND11_MODULE(cstreams, m)
   bind_meshes(m);
   bind_simulation(m);
   bind_detector(m);
+  bind_queries(m);
 }

@@ -16,6 +16,11 @@ def context():
 
 
 @pytest.fixture(scope="session")
+def data():
+    return DATA
+
+
+@pytest.fixture(scope="session")
 def funnel():
     """The cloth-funnel step: (V0, V1, F) and the frames' paths."""
     frames = DATA / "scalable-ccd-sample" / "cloth-funnel" / "frames"

@@ -141,3 +141,23 @@ def test_examples_run(funnel, tmp_path, capsys):
         module.main(*args)
     assert "earliest  t = " in capsys.readouterr().out
     assert (tmp_path / "t.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("dataset", ["erleben-spike-hole", "erleben-sliding-spike"])
+def test_hand_made_queries_equal_the_cpp_accuracy(context, cli, data, tmp_path, dataset):
+    folder = data / "sample-queries" / dataset
+    subprocess.run([cli, "accuracy", "--queries", str(folder), "--solver", "conservative", "--precision", "single",
+                    "--repeat", "1", "--json", str(tmp_path / "a.json")], check=True, capture_output=True)
+    expected = {r["kind"]: r for r in json.loads((tmp_path / "a.json").read_text())["results"]}
+    solver = cstreams.QuerySolver(context)
+    for kind, sub in (("vf", "vertex-face"), ("ee", "edge-edge")):
+        answers, truth = [], []
+        for path in sorted((folder / sub).glob("*.csv")):
+            points, collides = cstreams.read_queries(str(path))
+            answers.append(solver.solve(kind, points)[0])
+            truth.append(collides)
+        answers, truth = np.concatenate(answers), np.concatenate(truth)
+        assert len(answers) == expected[kind]["queries"]
+        assert int((truth & ~answers).sum()) == expected[kind]["false_negatives"] == 0
+        assert int((~truth & answers).sum()) == expected[kind]["false_positives"]
+        assert int(truth.sum()) == expected[kind]["positives"]
