@@ -23,18 +23,11 @@ public:
 
   void read(const runtime::Scheduler& scheduler, runtime::StreamId close_pairs, std::vector<ClosePair>& out);
 
-  // A pair's place in canonical order (canonical_less): kind and objects, features.
-  struct Key {
-    std::uint64_t objects, features;
-    std::uint32_t index;
-  };
-
 private:
   runtime::Context& context_;
   const SceneLayout& layout_;
   const FeatureIds& ids_;
   runtime::HostStaging records_;  // proximity.cl's records as read
-  std::vector<Key> keys_, sorting_;
 };
 
 }  // namespace cstreams
