@@ -141,8 +141,11 @@ inline real cs_edge_edge(const cs_v3 a0, const cs_v3 a1, const cs_v3 b0, const c
 
 CS_DEFINE_STREAM_ITEM(uint2)
 
-/* One work-item a candidate pair; emits (vertex_face << 4 | type, a, b, distance as a
- * float, rounded to nearest) for each pair closer than dhat (within rounding). */
+/* One work-item a candidate pair; emits (kind << 31 | a, b, distance as a float rounded
+ * to nearest, type) for each pair closer than dhat (within rounding), where kind is 0
+ * for a vertex and a face (a the vertex, b the face) and 1 for two edges: sorted as
+ * unsigned words, the first two put the pairs in canonical order (ids stay below
+ * 2^31). */
 __kernel void cs_close_pairs(CS_FOUR_STREAMS(uint2), __global const real* x, __global const uint* faces,
                              __global const uint* edges, const real dhat, CS_EMITTER_PARAMS(uint4, close))
 {
@@ -165,7 +168,7 @@ __kernel void cs_close_pairs(CS_FOUR_STREAMS(uint2), __global const real* x, __g
     int type;
     const real d2 = vertex_face ? cs_point_triangle(p[0], p + 1, &type) : cs_edge_edge(p[0], p[1], p[2], p[3], &type);
     const real d = sqrt(d2), reach = dhat + CS_DISTANCE_ULPS * CS_EPS * scale;
-    if (d < reach) CS_EMIT(close, (uint4)((vertex_face << 4) | (uint)type, pair.x, pair.y, as_uint((float)d)));
+    if (d < reach) CS_EMIT(close, (uint4)((vertex_face ? 0u : 1u << 31) | pair.x, pair.y, as_uint((float)d), (uint)type));
   }
   CS_EMITTER_END(close);
 }

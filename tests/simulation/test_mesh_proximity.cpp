@@ -137,3 +137,43 @@ TEST_CASE("candidates and bad input of the proximity calls", "[simulation]")
   CHECK_THROWS_WITH(proximity.close_pairs(p.V.topRows(4), 0.1), Catch::StartsWith("V:"));
   CHECK_FALSE(proximity.close_pairs(p.V, 0.03).empty());
 }
+
+TEST_CASE("a detector of close pairs over several objects finds the merged mesh's pairs", "[simulation]")
+{
+  Mesh lower = scenes::sheet(8, 8, 1, 1), upper = scenes::sheet(8, 8, 1, 1);
+  for (Vec3& x : upper.positions) x += Vec3(0.03, 0.05, 0.02);
+  SceneDescription scene;
+  scene.add({"upper", upper.faces, upper.positions});
+  scene.add({"lower", lower.faces, lower.positions});
+  DetectorOptions options;
+  options.detects = Detects::close_pairs;
+  options.dhat = 0.03;
+  options.solver.precision = test::device().device().fp64 ? Precision::double_ : Precision::single;
+  Detector detector(test::device(), scene, options);
+  detector.detect();
+  const std::vector<ClosePair>& found = detector.close_pairs();
+  CHECK(std::is_sorted(found.begin(), found.end(),
+                       [](const ClosePair& x, const ClosePair& y) { return canonical_less(x, y); }));
+  Mesh merged = upper;
+  scenes::append(merged, lower);
+  MeshProximityOptions one;
+  one.precision = options.solver.precision;
+  MeshProximity proximity(test::device(), CollisionMesh(merged.positions, merged.faces), one);
+  const std::vector<ClosePair>& expected = proximity.close_pairs(merged.positions, 0.03);
+  REQUIRE(found.size() == expected.size());
+  // The same pairs, by the merged mesh's ids (the upper plate's come first).
+  const auto nv = std::uint32_t(upper.positions.size()), nf = std::uint32_t(upper.faces.size());
+  const auto merged_key = [&](const ClosePair& p) {
+    if (p.kind == ContactKind::vertex_face)
+      return test::PairKey{0, p.a + (p.object_a ? nv : 0), p.b + (p.object_b ? nf : 0), 0, 0};
+    const std::uint32_t sa = p.object_a ? nv : 0, sb = p.object_b ? nv : 0;
+    ClosePair q = p;
+    q.v = {p.v[0] + sa, p.v[1] + sa, p.v[2] + sb, p.v[3] + sb};
+    return test::key(q);
+  };
+  std::set<test::PairKey> from_detector, from_mesh;
+  for (const ClosePair& p : found) from_detector.insert(merged_key(p));
+  for (const ClosePair& p : expected) from_mesh.insert(test::key(p));
+  CHECK(from_detector == from_mesh);
+  CHECK(std::count_if(found.begin(), found.end(), [](const ClosePair& p) { return p.object_a != p.object_b; }) > 0);
+}

@@ -483,7 +483,11 @@ void Detector::run_step(Report report)
   };
   if (s.options.detects == Detects::close_pairs) {
     after_run();
-    if (has(st.close_pairs)) s.close_readback.read(q, st.close_pairs, s.close);
+    if (has(st.close_pairs)) {
+      runtime::PassStats sort;
+      s.close_readback.read(q, st.close_pairs, s.options.profile, sort, s.close);
+      stats.run.passes.push_back(sort);
+    }
   } else if (report == Report::contacts) {
     runtime::PassStats readback;
     std::vector<runtime::Timeline::Entry> commands;

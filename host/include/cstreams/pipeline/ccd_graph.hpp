@@ -32,7 +32,7 @@ struct CcdStreams {
   runtime::StreamId triangle_pairs, vf, ee, orphan_vf, orphan_ee, kept_vf, kept_ee;
   runtime::StreamId earliest;
   runtime::StreamId object_contacts;  // refine.cl's `found`: per object, the earliest contact so far
-  runtime::StreamId close_pairs;  // proximity: (vertex_face << 4 | type, a, b, distance bits)
+  runtime::StreamId close_pairs;  // proximity.cl's (kind << 31 | a, b, distance bits, type)
   runtime::ParamId level_cap;
   runtime::ParamId earliest_only;     // 1: the step reports only each object's earliest time
   runtime::ParamId exact_floats;      // 1: the float positions are the input itself (no rounding)
