@@ -15,10 +15,14 @@ namespace cstreams::python {
 
 namespace {
 
-CollisionMesh collision_mesh(const py::array& V, const py::array& F)
+// E (edges in no face) is optional: None, or an (n, 2) array.
+CollisionMesh collision_mesh(const py::array& V, const py::array& F, const std::optional<py::array>& E)
 {
   return with_positions(V, "V", [&](const auto& v) {
-    return with_indices(F, "F", 3, [&](const auto& f) { return CollisionMesh(v, f); });
+    return with_indices(F, "F", 3, [&](const auto& f) {
+      if (!E) return CollisionMesh(v, f);
+      return with_indices(*E, "E", 2, [&](const auto& e) { return CollisionMesh(v, f, e); });
+    });
   });
 }
 
@@ -50,15 +54,16 @@ void bind_mesh_ccd(py::module_& m)
   py::class_<MeshCcd>(m, "MeshCcd",
                       "Earliest times of impact, collision-free steps and step sizes of one mesh's linear motions "
                       "V0 -> V1; keeps its BVH and front between calls.")
-      .def(py::init([](runtime::Context& device, const py::array& V, const py::array& F, const std::string& solver,
-                       const std::string& precision, const std::string& front) {
+      .def(py::init([](runtime::Context& device, const py::array& V, const py::array& F,
+                       const std::optional<py::array>& E, const std::string& solver, const std::string& precision,
+                       const std::string& front) {
              MeshCcdOptions o;
              o.solver = parse_solver(solver);
              o.precision = parse_precision(precision);
              o.front = parse_front_mode(front);
-             return std::make_unique<MeshCcd>(device, collision_mesh(V, F), o);
+             return std::make_unique<MeshCcd>(device, collision_mesh(V, F, E), o);
            }),
-           py::arg("context"), py::arg("V"), py::arg("F"), py::arg("solver") = "conservative",
+           py::arg("context"), py::arg("V"), py::arg("F"), py::arg("E") = py::none(), py::arg("solver") = "conservative",
            py::arg("precision") = "single", py::arg("front") = "exact", py::keep_alive<1, 2>())
       .def(
           "toi",
@@ -96,14 +101,14 @@ void bind_mesh_proximity(py::module_& m)
   py::class_<MeshProximity>(m, "MeshProximity",
                             "Pairs of one mesh closer than dhat (with distances and closest features), or the "
                             "broad phase's candidates; keeps its BVH and front between calls.")
-      .def(py::init([](runtime::Context& device, const py::array& V, const py::array& F, const std::string& precision,
-                       const std::string& front) {
+      .def(py::init([](runtime::Context& device, const py::array& V, const py::array& F,
+                       const std::optional<py::array>& E, const std::string& precision, const std::string& front) {
              MeshProximityOptions o;
              o.precision = parse_precision(precision);
              o.front = parse_front_mode(front);
-             return std::make_unique<MeshProximity>(device, collision_mesh(V, F), o);
+             return std::make_unique<MeshProximity>(device, collision_mesh(V, F, E), o);
            }),
-           py::arg("context"), py::arg("V"), py::arg("F"), py::arg("precision") = "double",
+           py::arg("context"), py::arg("V"), py::arg("F"), py::arg("E") = py::none(), py::arg("precision") = "double",
            py::arg("front") = "exact", py::keep_alive<1, 2>())
       .def(
           "close_pairs",

@@ -161,3 +161,19 @@ def test_hand_made_queries_equal_the_cpp_accuracy(context, cli, data, tmp_path, 
         assert int((truth & ~answers).sum()) == expected[kind]["false_negatives"] == 0
         assert int((~truth & answers).sum()) == expected[kind]["false_positives"]
         assert int(truth.sum()) == expected[kind]["positives"]
+
+
+def test_rods_and_points(context):
+    # A plate of two triangles, a rod of two segments above it and a free point.
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                  [0.1, 0.5, 0.1], [0.5, 0.5, 0.1], [0.9, 0.5, 0.1], [0.3, 0.3, 0.2]], dtype=np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)
+    E = np.array([[4, 5], [5, 6]], dtype=np.int64)
+    ccd = cstreams.MeshCcd(context, V, F, E=E)
+    down = V.copy()
+    down[4:, 2] -= 0.3
+    assert 0.1 / 0.3 - 1e-4 <= ccd.toi(V, down) <= 0.1 / 0.3
+    pairs = cstreams.MeshProximity(context, V, F, E=E).close_pairs(V, 0.15)
+    assert len(pairs) > 0 and (pairs["b"] >= len(F)).any()  # pairs with the rod's or the point's faces
+    with pytest.raises(ValueError, match="^E: "):
+        cstreams.MeshCcd(context, V, F, E=np.array([[4, 99]]))

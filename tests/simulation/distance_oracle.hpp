@@ -124,7 +124,7 @@ inline std::map<PairKey, Closest> oracle_pairs(const Mesh& m, long double reach)
   std::set<std::array<std::uint32_t, 2>> edge_set;
   for (const Face& f : m.faces)
     for (int k = 0; k < 3; ++k)
-      edge_set.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
+      if (f[k] != f[(k + 1) % 3]) edge_set.insert({std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])});
   const std::vector<std::array<std::uint32_t, 2>> edges(edge_set.begin(), edge_set.end());
   for (std::uint32_t v = 0; v < m.positions.size(); ++v)
     for (std::uint32_t f = 0; f < m.faces.size(); ++f) {

@@ -159,9 +159,12 @@ TEST_CASE("bad arrays and parameters name themselves and leave the object usable
   faces(1, 1) = faces(1, 0);
   fails_naming([&] { CollisionMesh(p.V, faces); }, "F");
   fails_naming([&] { CollisionMesh(p.V, Eigen::MatrixXi(p.F.leftCols(2))); }, "F");
-  Eigen::MatrixXd extra(p.V.rows() + 1, 3);
-  extra << p.V, Eigen::RowVector3d(5, 5, 5);
-  fails_naming([&] { CollisionMesh(extra, p.F); }, "V");
+  Eigen::MatrixXi edges(1, 2);
+  edges << 0, int(p.V.rows());
+  fails_naming([&] { CollisionMesh(p.V, p.F, edges); }, "E");
+  edges << 3, 3;
+  fails_naming([&] { CollisionMesh(p.V, p.F, edges); }, "E");
+  fails_naming([&] { CollisionMesh(Eigen::MatrixXd(0, 3), Eigen::MatrixXi(0, 3)); }, "V");
 }
 
 TEST_CASE("toi of a real step lies within a tolerance below its exact earliest time", "[simulation]")

@@ -57,6 +57,7 @@ void check_against_oracle(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, do
     for (const auto& [key, c] : oracle)
       if (c.distance < dhat) CHECK(seen.count(key) == 1);  // none closer than dhat missed
     CHECK(found.size() >= within);
+    CHECK(seen.size() == found.size());  // each pair once
     CHECK(std::is_sorted(found.begin(), found.end(),
                          [](const ClosePair& x, const ClosePair& y) { return canonical_less(x, y); }));
     if (precision == Precision::double_) CHECK(typed > 0);

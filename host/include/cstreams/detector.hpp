@@ -47,11 +47,26 @@ FrontMode parse_front_mode(const std::string& text);
 
 // One object as the detector sees it: a triangle mesh and where it starts.
 struct ObjectDescription {
+  ObjectDescription() = default;
+  ObjectDescription(std::string name, std::vector<Face> faces, std::vector<Vec3> positions,
+                    ObjectKind kind = ObjectKind::deformable, bool self_collision = true)
+      : name(std::move(name)), faces(std::move(faces)), positions(std::move(positions)), kind(kind),
+        self_collision(self_collision)
+  {
+  }
+
   std::string name;
   std::vector<Face> faces;
   std::vector<Vec3> positions;  // a static object stays here for good
   ObjectKind kind = ObjectKind::deformable;
   bool self_collision = true;   // deformable objects only
+  // Codimensional geometry, which needs the conservative solver: segments that belong to
+  // no face (rods, seams), as pairs of vertices, and vertices that belong to no face or
+  // segment (particles). Each collides as a degenerate face, (a, b, b) or (p, p, p),
+  // after the object's faces: contacts and close pairs name it by the face id past
+  // them (segments first, then points) and by those vertices.
+  std::vector<Edge> segments;
+  std::vector<std::uint32_t> points;
 };
 
 struct SceneDescription {

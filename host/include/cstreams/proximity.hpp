@@ -25,7 +25,8 @@ enum class ClosestFeatures : std::uint8_t { point_triangle, edge_edge, point_edg
 struct ClosePair {
   ContactKind kind = ContactKind::vertex_face;
   std::uint32_t object_a = 0, object_b = 0;
-  // Local to their objects: the vertex and the face (a row of the object's faces), or
+  // Local to their objects: the vertex and the face (a row of the object's faces, or
+  // past them a segment's or a point's degenerate face: ObjectDescription::segments), or
   // two edges (Topology::edges of the objects' faces, the smaller first within one
   // object).
   std::uint32_t a = 0, b = 0;

@@ -45,11 +45,14 @@ Topology build_topology(const std::vector<Face>& faces, std::size_t vertex_count
   struct HalfEdge {
     std::uint32_t hi, lo, face, k;
   };
-  std::vector<HalfEdge> half(3 * nf);
+  // A degenerate face (a segment's (a, b, b) or a point's (p, p, p)) has no edge where
+  // its two ends are one vertex.
+  std::vector<HalfEdge> half;
+  half.reserve(3 * nf);
   for (std::uint32_t f = 0; f < nf; ++f)
     for (std::uint32_t k = 0; k < 3; ++k) {
       const std::uint32_t a = faces[f][k], b = faces[f][(k + 1) % 3];
-      half[3 * f + k] = {std::max(a, b), std::min(a, b), f, k};
+      if (a != b) half.push_back({std::max(a, b), std::min(a, b), f, k});
     }
   std::sort(half.begin(), half.end(), [](const HalfEdge& x, const HalfEdge& y) {
     return x.hi != y.hi ? x.hi < y.hi : x.lo != y.lo ? x.lo < y.lo : x.face < y.face;
@@ -77,10 +80,15 @@ Topology build_topology(const std::vector<Face>& faces, std::size_t vertex_count
     if (t.vertex_face_offsets[v + 1] > t.vertex_face_offsets[v]) t.vertex_owner[v] = t.vertex_faces[t.vertex_face_offsets[v]];
 
   t.owned.assign(nf, 0);
+  // A vertex a face holds twice, or an edge it holds both ways (a segment's), is owned
+  // in its first place only.
   for (std::uint32_t f = 0; f < nf; ++f)
     for (std::uint32_t k = 0; k < 3; ++k) {
-      if (t.vertex_owner[faces[f][k]] == f) t.owned[f] |= std::uint8_t(1u << k);
-      if (t.edge_owner[t.face_edges[f][k]] == f) t.owned[f] |= std::uint8_t(8u << k);
+      const std::uint32_t v = faces[f][k], e = t.face_edges[f][k];
+      const bool first_v = k == 0 || (faces[f][0] != v && (k == 1 || faces[f][1] != v));
+      const bool first_e = k == 0 || (t.face_edges[f][0] != e && (k == 1 || t.face_edges[f][1] != e));
+      if (first_v && t.vertex_owner[v] == f) t.owned[f] |= std::uint8_t(1u << k);
+      if (e != no_index && first_e && t.edge_owner[e] == f) t.owned[f] |= std::uint8_t(8u << k);
     }
   return t;
 }

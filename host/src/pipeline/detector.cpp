@@ -395,6 +395,11 @@ runtime::Context& checked_device(runtime::Context& device, const DetectorOptions
 
 Detector::Detector(runtime::Context& device, SceneDescription scene, DetectorOptions options)
 {
+  // The cubic's coplanarity test holds for any point and a degenerate face.
+  for (const ObjectDescription& o : scene.objects)
+    if ((!o.segments.empty() || !o.points.empty()) && options.solver.solver == Solver::cubic &&
+        options.detects == Detects::contacts)
+      throw InputError("object '" + o.name + "': segments and points need the conservative solver");
   runtime::Context::ThreadGuard one_thread(device);
   state_ = std::make_unique<State>(checked_device(device, options), std::move(scene), options);
 }

@@ -19,17 +19,24 @@ static_assert(max_tree_depth < (std::size_t(1) << node_depth_bits) &&
 void check_object(const ObjectDescription& o)
 {
   const std::string what = "object '" + o.name + "': ";
-  if (o.faces.empty()) throw InputError(what + "has no faces");
+  if (o.faces.empty() && o.segments.empty() && o.points.empty()) throw InputError(what + "has no faces");
   const std::size_t n = o.positions.size();
+  const auto check_vertex = [&](std::uint32_t v, const char* kind, std::size_t i) {
+    if (v >= n)
+      throw InputError(what + kind + " " + std::to_string(i) + " uses vertex " + std::to_string(v) + " of " +
+                       std::to_string(n));
+  };
   for (std::size_t f = 0; f < o.faces.size(); ++f) {
     const Face& face = o.faces[f];
-    for (std::uint32_t v : face)
-      if (v >= n)
-        throw InputError(what + "face " + std::to_string(f) + " uses vertex " + std::to_string(v) + " of " +
-                         std::to_string(n));
+    for (std::uint32_t v : face) check_vertex(v, "face", f);
     if (face[0] == face[1] || face[1] == face[2] || face[0] == face[2])
       throw InputError(what + "face " + std::to_string(f) + " repeats a vertex");
   }
+  for (std::size_t e = 0; e < o.segments.size(); ++e) {
+    for (std::uint32_t v : o.segments[e]) check_vertex(v, "segment", e);
+    if (o.segments[e][0] == o.segments[e][1]) throw InputError(what + "segment " + std::to_string(e) + " repeats a vertex");
+  }
+  for (std::size_t p = 0; p < o.points.size(); ++p) check_vertex(o.points[p], "point", p);
   try {
     to_float_positions(o.positions);
   } catch (const InputError& e) {
@@ -68,7 +75,7 @@ std::vector<Topology> build_trees(const SceneDescription& scene, double separati
   l.trees.resize(n);
   for (std::size_t o = 0; o < n; ++o) {
     const ObjectDescription& d = scene.objects[o];
-    topologies[o] = build_topology(d.faces, d.positions.size());
+    topologies[o] = build_topology(collision_faces(d), d.positions.size());
     l.trees[o] = build_bvh(swept_bounds(topologies[o], d.positions, d.positions, separation).faces);
     if (l.trees[o].depth() > max_tree_depth)
       throw InputError("object '" + d.name + "': its BVH has " + std::to_string(l.trees[o].depth()) +
@@ -178,6 +185,14 @@ void join_topologies(const std::vector<Topology>& topologies, SceneLayout& l)
 }
 
 }  // namespace
+
+std::vector<Face> collision_faces(const ObjectDescription& object)
+{
+  std::vector<Face> faces = object.faces;
+  for (const Edge& e : object.segments) faces.push_back({e[0], e[1], e[1]});
+  for (const std::uint32_t p : object.points) faces.push_back({p, p, p});
+  return faces;
+}
 
 SceneLayout make_layout(const SceneDescription& scene, double separation)
 {

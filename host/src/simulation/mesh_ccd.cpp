@@ -42,7 +42,7 @@ struct MeshCcd::State {
       return *detector;
     check_solver_options(device, solver);
     SceneDescription scene;
-    scene.add({"mesh", mesh.faces(), mesh.rest_positions()});
+    scene.add(object_of(mesh));
     DetectorOptions d;
     d.solver = solver;
     d.front = options.front;

@@ -24,7 +24,7 @@ struct MeshProximity::State {
                        std::to_string(mesh.vertex_count()) + " vertices");
     if (!detector || built_for != dhat) {
       SceneDescription scene;
-      scene.add({"mesh", mesh.faces(), mesh.rest_positions()});
+      scene.add(object_of(mesh));
       DetectorOptions d;
       d.detects = Detects::close_pairs;
       d.dhat = dhat;

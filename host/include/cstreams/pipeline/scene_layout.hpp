@@ -59,6 +59,10 @@ struct SceneLayout {
 
 // Checks the description (an InputError naming the object) and lays it out; each
 // tree is built over the object's starting positions.
+// The faces an object collides with: its own, then a degenerate face for each segment,
+// (a, b, b), and for each point, (p, p, p).
+std::vector<Face> collision_faces(const ObjectDescription& object);
+
 SceneLayout make_layout(const SceneDescription& scene, double separation);
 
 // The seeds expanded breadth first, level by level, without bounds tests, until there

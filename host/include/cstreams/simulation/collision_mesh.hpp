@@ -1,9 +1,12 @@
 #pragma once
-// The surface a simulator collides, made once from its arrays (arrays.hpp): the rest
-// positions V (#V x 3) and the faces F (#F x 3). Every vertex must belong to a face:
-// vertices and edges that belong to no face (codimensional points and rods) do not
-// collide yet, and a mesh with them is refused rather than missing their contacts.
+// The surface a simulator collides, made once from its arrays (arrays.hpp), as
+// ipc-toolkit's CollisionMesh: the rest positions V (#V x 3), the faces F (#F x 3) and
+// optionally edges E (#E x 2) that belong to no face. Those edges collide as segments
+// (rods, seams), and the vertices that belong to no face and no edge as points
+// (particles): codimensional geometry, which the conservative solver handles (the
+// cubic refuses it).
 #include <cstreams/geometry/mesh.hpp>
+#include <cstreams/geometry/topology.hpp>
 #include <cstreams/simulation/arrays.hpp>
 
 #include <cstddef>
@@ -21,17 +24,35 @@ public:
     std::vector<Face> faces = indices_from<3>(F, "F", rest.size());
     *this = CollisionMesh(std::move(rest), std::move(faces));
   }
-  // Throws InputError naming F (no faces, a face that repeats a vertex) or V (a vertex
-  // in no face).
-  CollisionMesh(std::vector<Vec3> rest, std::vector<Face> faces);
+  template <typename DerivedV, typename DerivedF, typename DerivedE>
+  CollisionMesh(const Eigen::MatrixBase<DerivedV>& V, const Eigen::MatrixBase<DerivedF>& F,
+                const Eigen::MatrixBase<DerivedE>& E)
+  {
+    std::vector<Vec3> rest = positions_from(V, "V");
+    std::vector<Face> faces = indices_from<3>(F, "F", rest.size());
+    std::vector<Edge> segments = indices_from<2>(E, "E", rest.size());
+    *this = CollisionMesh(std::move(rest), std::move(faces), std::move(segments));
+  }
+  // Throws InputError naming V (no vertices), F or E (an index out of range, a face or
+  // edge that repeats a vertex).
+  CollisionMesh(std::vector<Vec3> rest, std::vector<Face> faces, std::vector<Edge> segments = {});
 
   std::size_t vertex_count() const { return rest_.size(); }
   const std::vector<Vec3>& rest_positions() const { return rest_; }
   const std::vector<Face>& faces() const { return faces_; }
+  const std::vector<Edge>& segments() const { return segments_; }  // E's rows
+  const std::vector<std::uint32_t>& points() const { return points_; }  // vertices in no face or edge
+  bool codimensional() const { return !segments_.empty() || !points_.empty(); }
 
 private:
   std::vector<Vec3> rest_;
   std::vector<Face> faces_;
+  std::vector<Edge> segments_;
+  std::vector<std::uint32_t> points_;
 };
+
+struct ObjectDescription;
+// The mesh as a detector's one deformable, self-colliding object.
+ObjectDescription object_of(const CollisionMesh& mesh);
 
 }  // namespace cstreams

@@ -7,7 +7,9 @@
 //   cstreams::MeshProximity proximity(device, cstreams::CollisionMesh(V_rest, F));
 //   for (const cstreams::ClosePair& p : proximity.close_pairs(V, dhat)) ...
 //
-// Adjacent features (sharing a vertex) are never paired. Distances are computed in the
+// Adjacent features (sharing a vertex) are never paired. Segments and points (the
+// mesh's edges in no face and vertices in neither) pair with everything as their
+// degenerate faces (ObjectDescription::segments). Distances are computed in the
 // options' precision; a pair is reported where its distance is below dhat, or above it
 // by at most 16 units of rounding at the pair's coordinates (2^-48 of their magnitude
 // in double, 2^-19 in single), so that none closer than dhat is missed. One object
