@@ -68,7 +68,11 @@ TEST_CASE("a point falls onto a plate, a rod and another point", "[simulation]")
   const std::uint32_t below = w.point({0.8, 0.2, 0.05}), onto_point = w.point({0.8, 0.2, 0.25});
   const CollisionMesh mesh = w.mesh();
   CHECK(mesh.points() == std::vector<std::uint32_t>{onto_plate, onto_rod, below, onto_point});
-  MeshCcd ccd(test::device(), mesh);
+  const Precision precision = GENERATE(Precision::single, Precision::double_);
+  if (precision == Precision::double_ && !test::device().device().fp64) return;
+  MeshCcdOptions options;
+  options.precision = precision;
+  MeshCcd ccd(test::device(), mesh, options);
   const Vec3 down(0, 0, -0.3);
   // Each alone: the point onto the plate, onto the rod's middle, onto the point below.
   check_toi(ccd.toi(w.x, moved(w.x, onto_plate, onto_plate + 1, down)), 0.1 / 0.3);
