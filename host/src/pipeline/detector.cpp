@@ -98,8 +98,12 @@ struct Detector::State {
       : context(device), scene(std::move(s)), options(o), layout(make_layout(scene, bounds_margin(o))),
         front(o, layout, 4 * device.device().compute_units * device.work_group_size(), device.work_group_size(),
               device.loop_trip_limit() != 0),
-        ids(layout), readback(device, layout, scene, o.solver.precision)
+        ids(layout)
   {
+    // Each kind of detector reads back its own results: a reader builds its sort and
+    // pins its host memory as it is made.
+    if (o.detects == Detects::contacts) readback.emplace(device, layout, scene, o.solver.precision);
+    else close_readback.emplace(device, layout, ids);
     const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
     CcdGraph g = build_ccd_graph(layout, options, seeds.size(), graph_device(device));
     streams = g.streams;
@@ -122,8 +126,8 @@ struct Detector::State {
   SceneLayout layout;
   FrontControl front;
   FeatureIds ids;
-  ContactReadback readback;
-  ClosePairReadback close_readback{context, layout, ids};
+  std::optional<ContactReadback> readback;
+  std::optional<ClosePairReadback> close_readback;
   PositionWrites given{context};  // set_positions() and set_step()'s
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
@@ -490,13 +494,13 @@ void Detector::run_step(Report report)
     after_run();
     if (has(st.close_pairs)) {
       runtime::PassStats sort;
-      s.close_readback.read(q, st.close_pairs, s.options.profile, sort, s.close);
+      s.close_readback->read(q, st.close_pairs, s.options.profile, sort, s.close);
       stats.run.passes.push_back(sort);
     }
   } else if (report == Report::contacts) {
     runtime::PassStats readback;
     std::vector<runtime::Timeline::Entry> commands;
-    s.contacts = s.readback.read(q, st, s.options.profile, readback, commands, after_run);
+    s.contacts = s.readback->read(q, st, s.options.profile, readback, commands, after_run);
     s.have_contacts = true;
     stats.run.passes.push_back(readback);
     stats.run.commands.insert(stats.run.commands.end(), commands.begin(), commands.end());
