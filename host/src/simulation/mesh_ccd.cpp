@@ -2,9 +2,8 @@
 #include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/simulation/mesh_ccd.hpp>
 
-#include <algorithm>
-#include <cmath>
 #include <string>
+#include <utility>
 
 namespace cstreams {
 

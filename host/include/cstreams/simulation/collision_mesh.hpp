@@ -42,7 +42,6 @@ public:
   const std::vector<Face>& faces() const { return faces_; }
   const std::vector<Edge>& segments() const { return segments_; }  // E's rows
   const std::vector<std::uint32_t>& points() const { return points_; }  // vertices in no face or edge
-  bool codimensional() const { return !segments_.empty() || !points_.empty(); }
 
 private:
   std::vector<Vec3> rest_;
