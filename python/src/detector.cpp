@@ -19,7 +19,7 @@ std::vector<Vec3> positions(const py::array& V, const char* name, std::size_t ro
 }
 
 // One object from a dict: name, faces F, positions V; kind and self_collision optional.
-ObjectDescription object_of(const py::dict& d, std::size_t index)
+ObjectDescription object_from_dict(const py::dict& d, std::size_t index)
 {
   const std::string where = "objects[" + std::to_string(index) + "]";
   for (const char* key : {"name", "faces", "positions"})
@@ -41,7 +41,7 @@ std::unique_ptr<Detector> make_detector(runtime::Context& device, const py::list
                                         const std::string& front)
 {
   SceneDescription scene;
-  for (std::size_t i = 0; i < objects.size(); ++i) scene.add(object_of(objects[i].cast<py::dict>(), i));
+  for (std::size_t i = 0; i < objects.size(); ++i) scene.add(object_from_dict(objects[i].cast<py::dict>(), i));
   DetectorOptions o;
   o.solver.solver = parse_solver(solver);
   o.solver.precision = parse_precision(precision);

@@ -18,8 +18,8 @@ template <typename Scalar>
 using View = Eigen::Map<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0,
                         Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
 
-// Checks `a` against the shape (rows any, `cols`) and calls `use` with an Eigen view of
-// it in its own scalar type, one of the two `Kinds` allows.
+// Checks `a` against the shape (any rows, `cols` columns) and calls `use` with an Eigen
+// view of it in its own scalar type, which must be First or Second.
 template <typename First, typename Second, typename Use>
 auto with_view(const py::array& a, const char* name, py::ssize_t cols, const char* wanted, Use&& use)
 {
