@@ -27,6 +27,8 @@ struct MeshCcd::State {
   // min_distance, tolerance or max_iterations builds another (a line search keeps them).
   std::unique_ptr<Detector> detector;
   SolverOptions built_for;
+  std::vector<Vec3> copies[2];  // the Eigen calls' V0 and V1
+  std::vector<Vec3> scaled_end;  // V0 + tmax (V1 - V0)
 
   Detector& detector_for(const CcdParameters& p)
   {
@@ -61,9 +63,9 @@ struct MeshCcd::State {
     check_count("V1", V1);
     Detector& d = detector_for(p);
     if (p.tmax < 1) {
-      std::vector<Vec3> end(V0.size());
-      for (std::size_t v = 0; v < end.size(); ++v) end[v] = V0[v] + p.tmax * (V1[v] - V0[v]);
-      d.set_step(0, V0, end);
+      scaled_end.resize(V0.size());
+      for (std::size_t v = 0; v < V0.size(); ++v) scaled_end[v] = V0[v] + p.tmax * (V1[v] - V0[v]);
+      d.set_step(0, V0, scaled_end);
     } else {
       d.set_step(0, V0, V1);
     }
@@ -81,7 +83,7 @@ struct MeshCcd::State {
 };
 
 MeshCcd::MeshCcd(runtime::Context& device, CollisionMesh mesh, MeshCcdOptions options)
-    : state_(new State{device, std::move(mesh), options, nullptr, {}})
+    : state_(new State{device, std::move(mesh), options, nullptr, {}, {}, {}})
 {
 }
 
@@ -108,6 +110,8 @@ double MeshCcd::collision_free_stepsize(const std::vector<Vec3>& V0, const std::
   const auto [collides, t] = state_->earliest(V0, V1, p);
   return collides ? conservative_rescaling * t : 1.0;
 }
+
+std::vector<Vec3>& MeshCcd::copies(int end) { return state_->copies[end]; }
 
 std::size_t MeshCcd::vertex_count() const { return state_->mesh.vertex_count(); }
 const CollisionMesh& MeshCcd::mesh() const { return state_->mesh; }

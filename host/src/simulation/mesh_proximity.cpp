@@ -15,6 +15,7 @@ struct MeshProximity::State {
   // dhat stays the same from one iteration to the next.
   std::unique_ptr<Detector> detector;
   double built_for = 0;
+  std::vector<Vec3> copy;
 
   Detector& run(const std::vector<Vec3>& V, double dhat, const char* name)
   {
@@ -43,7 +44,7 @@ struct MeshProximity::State {
 };
 
 MeshProximity::MeshProximity(runtime::Context& device, CollisionMesh mesh, MeshProximityOptions options)
-    : state_(new State{device, std::move(mesh), options, nullptr, 0})
+    : state_(new State{device, std::move(mesh), options, nullptr, 0, {}})
 {
 }
 
@@ -59,6 +60,8 @@ CandidateBlock MeshProximity::candidates(const std::vector<Vec3>& V, double radi
   Candidates all = state_->run(V, radius, "radius").candidates();
   return all.blocks.empty() ? CandidateBlock{} : std::move(all.blocks.front());
 }
+
+std::vector<Vec3>& MeshProximity::copy() { return state_->copy; }
 
 std::size_t MeshProximity::vertex_count() const { return state_->mesh.vertex_count(); }
 const CollisionMesh& MeshProximity::mesh() const { return state_->mesh; }

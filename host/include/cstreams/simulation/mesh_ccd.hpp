@@ -59,7 +59,7 @@ public:
   template <typename A, typename B>
   double toi(const Eigen::MatrixBase<A>& V0, const Eigen::MatrixBase<B>& V1, const CcdParameters& parameters = {})
   {
-    return toi(positions_from(V0, "V0", vertex_count()), positions_from(V1, "V1", vertex_count()), parameters);
+    return toi(start(V0), end(V1), parameters);
   }
   double toi(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, const CcdParameters& parameters = {});
 
@@ -69,8 +69,7 @@ public:
   template <typename A, typename B>
   bool is_step_collision_free(const Eigen::MatrixBase<A>& V0, const Eigen::MatrixBase<B>& V1, double min_distance = 0)
   {
-    return is_step_collision_free(positions_from(V0, "V0", vertex_count()), positions_from(V1, "V1", vertex_count()),
-                                  min_distance);
+    return is_step_collision_free(start(V0), end(V1), min_distance);
   }
   bool is_step_collision_free(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, double min_distance = 0);
 
@@ -84,8 +83,7 @@ public:
                                  double min_distance = 0,
                                  double conservative_rescaling = default_conservative_rescaling)
   {
-    return collision_free_stepsize(positions_from(V0, "V0", vertex_count()), positions_from(V1, "V1", vertex_count()),
-                                   min_distance, conservative_rescaling);
+    return collision_free_stepsize(start(V0), end(V1), min_distance, conservative_rescaling);
   }
   double collision_free_stepsize(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, double min_distance = 0,
                                  double conservative_rescaling = default_conservative_rescaling);
@@ -96,6 +94,19 @@ public:
   const DetectorStats& stats() const;
 
 private:
+  // The arrays' copies, in memory kept from call to call.
+  template <typename A> const std::vector<Vec3>& start(const Eigen::MatrixBase<A>& V0)
+  {
+    positions_into(V0, "V0", vertex_count(), copies(0));
+    return copies(0);
+  }
+  template <typename A> const std::vector<Vec3>& end(const Eigen::MatrixBase<A>& V1)
+  {
+    positions_into(V1, "V1", vertex_count(), copies(1));
+    return copies(1);
+  }
+  std::vector<Vec3>& copies(int end);
+
   struct State;
   std::unique_ptr<State> state_;
 };

@@ -39,7 +39,8 @@ public:
   // valid until the next call (copy them to keep them).
   template <typename A> const std::vector<ClosePair>& close_pairs(const Eigen::MatrixBase<A>& V, double dhat)
   {
-    return close_pairs(positions_from(V, "V", vertex_count()), dhat);
+    positions_into(V, "V", vertex_count(), copy());
+    return close_pairs(copy(), dhat);
   }
   const std::vector<ClosePair>& close_pairs(const std::vector<Vec3>& V, double dhat);
 
@@ -48,7 +49,8 @@ public:
   // as ipc-toolkit's inflation radius), sorted.
   template <typename A> CandidateBlock candidates(const Eigen::MatrixBase<A>& V, double radius)
   {
-    return candidates(positions_from(V, "V", vertex_count()), radius);
+    positions_into(V, "V", vertex_count(), copy());
+    return candidates(copy(), radius);
   }
   CandidateBlock candidates(const std::vector<Vec3>& V, double radius);
 
@@ -57,6 +59,8 @@ public:
   const DetectorStats& stats() const;  // the last call's
 
 private:
+  std::vector<Vec3>& copy();  // the Eigen calls' V, in memory kept from call to call
+
   struct State;
   std::unique_ptr<State> state_;
 };
