@@ -18,7 +18,8 @@ std::vector<Vec3> positions(const py::array& V, const char* name, std::size_t ro
   return with_positions(V, name, [&](const auto& v) { return positions_from(v, name, rows); });
 }
 
-// One object from a dict: name, faces F, positions V; kind and self_collision optional.
+// One object from a dict: name, faces (m, 3), positions (n, 3); optionally segments
+// (k, 2), points (vertex ids), kind and self_collision.
 ObjectDescription object_from_dict(const py::dict& d, std::size_t index)
 {
   const std::string where = "objects[" + std::to_string(index) + "]";
@@ -31,6 +32,23 @@ ObjectDescription object_from_dict(const py::dict& d, std::size_t index)
   o.faces = with_indices(d["faces"].cast<py::array>(), f_name.c_str(), 3, [&](const auto& f) {
     return indices_from<3>(f, f_name.c_str(), o.positions.size());
   });
+  if (d.contains("segments")) {
+    const std::string e_name = where + ".segments";
+    o.segments = with_indices(d["segments"].cast<py::array>(), e_name.c_str(), 2, [&](const auto& e) {
+      return indices_from<2>(e, e_name.c_str(), o.positions.size());
+    });
+  }
+  if (d.contains("points")) {
+    const std::string p_name = where + ".points";
+    const auto points = py::array_t<std::int64_t, py::array::forcecast>(d["points"].cast<py::array>());
+    for (py::ssize_t i = 0; i < points.size(); ++i) {
+      const std::int64_t v = points.data()[i];
+      if (v < 0 || std::uint64_t(v) >= o.positions.size())
+        throw InputError(p_name + ": entry " + std::to_string(i) + " holds vertex " + std::to_string(v) + "; there are " +
+                         std::to_string(o.positions.size()) + " positions");
+      o.points.push_back(std::uint32_t(v));
+    }
+  }
   if (d.contains("kind")) o.kind = parse_object_kind(py::cast<std::string>(d["kind"]));
   if (d.contains("self_collision")) o.self_collision = py::cast<bool>(d["self_collision"]);
   return o;
@@ -59,7 +77,8 @@ void bind_detector(py::module_& m)
   const SolverOptions d;
   py::class_<Detector>(m, "Detector",
                        "CCD of a scene of objects, step after step. objects: dicts with name, faces (m, 3), "
-                       "positions (n, 3), and optionally kind (deformable, rigid, static) and self_collision.")
+                       "positions (n, 3), and optionally segments (k, 2) and points (vertex ids) that collide as "
+                       "rods and particles, kind (deformable, rigid, static) and self_collision.")
       .def(py::init(&make_detector), py::arg("context"), py::arg("objects"), py::arg("solver") = "conservative",
            py::arg("precision") = "single", py::arg("tolerance") = d.tolerance, py::arg("min_separation") = 0.0,
            py::arg("front") = "exact", py::keep_alive<1, 2>())

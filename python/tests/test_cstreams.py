@@ -177,3 +177,21 @@ def test_rods_and_points(context):
     assert len(pairs) > 0 and (pairs["b"] >= len(F)).any()  # pairs with the rod's or the point's faces
     with pytest.raises(ValueError, match="^E: "):
         cstreams.MeshCcd(context, V, F, E=np.array([[4, 99]]))
+
+
+def test_detector_with_segments_and_points(context):
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                  [0.2, 0.5, 0.1], [0.8, 0.5, 0.1], [0.3, 0.3, 0.2]], dtype=np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32)
+    detector = cstreams.Detector(context, [dict(name="m", faces=F, positions=V, segments=np.array([[4, 5]]),
+                                                points=[6])])
+    end = V.copy()
+    end[4:, 2] -= 0.3
+    detector.set_positions(0, end)
+    detector.detect()
+    contacts = detector.contacts()
+    # The rod's ends and the point reach the plate; the earliest, the rod's, at a third.
+    assert 0.1 / 0.3 - 1e-4 <= detector.earliest_toi()[0] <= 0.1 / 0.3
+    assert {4, 5, 6} <= set(int(c["v"][0]) for c in contacts if c["kind"] == 0)
+    with pytest.raises(ValueError, match=r"^objects\[0\]\.points: entry 0 holds vertex 9"):
+        cstreams.Detector(context, [dict(name="m", faces=F, positions=V, points=[9])])

@@ -130,6 +130,18 @@ void check(const MeasureOptions& o)
   parse_step_range(o.frames);
 }
 
+std::vector<double> warm_call_ms(unsigned repeat, const std::function<void()>& call)
+{
+  std::vector<double> ms;
+  for (unsigned i = 0; i <= repeat; ++i) {
+    const auto begin = std::chrono::steady_clock::now();
+    call();
+    const std::chrono::duration<double, std::milli> took = std::chrono::steady_clock::now() - begin;
+    if (i > 0) ms.push_back(took.count());
+  }
+  return ms;
+}
+
 void print_passes(const DetectorStats& stats)
 {
   std::printf("\ndevice time per pass in the last call (ms):\n");

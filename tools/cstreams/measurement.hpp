@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -53,6 +54,10 @@ DetectorOptions detector_options(const MeasureOptions& o);
 bool uploads_ahead(const MeasureOptions& o);
 
 double median(std::vector<double> v);
+
+// Makes `repeat` + 1 calls and returns the wall times of all but the first, which
+// builds what the others reuse (a BVH's front): warm calls, as a solver makes them.
+std::vector<double> warm_call_ms(unsigned repeat, const std::function<void()>& call);
 
 // Each pass's device time in a detector's last step, for the commands' --passes.
 void print_passes(const DetectorStats& stats);

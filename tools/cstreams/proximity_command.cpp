@@ -15,7 +15,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -88,14 +87,7 @@ void proximity(const ProximityOptions& o)
   options.profile = o.passes;
   MeshProximity proximity(context, CollisionMesh(m.positions, m.faces), options);
   const std::vector<ClosePair>* found = nullptr;
-  std::vector<double> ms;
-  // The first call builds the front; the rest are a Newton iteration's warm calls.
-  for (unsigned call = 0; call <= o.repeat; ++call) {
-    const auto begin = std::chrono::steady_clock::now();
-    found = &proximity.close_pairs(m.positions, dhat);
-    const std::chrono::duration<double, std::milli> took = std::chrono::steady_clock::now() - begin;
-    if (call > 0) ms.push_back(took.count());
-  }
+  const std::vector<double> ms = warm_call_ms(o.repeat, [&] { found = &proximity.close_pairs(m.positions, dhat); });
   const std::vector<ClosePair>& pairs = *found;
   std::map<std::string, std::size_t> by_closest;
   float smallest = std::numeric_limits<float>::infinity();

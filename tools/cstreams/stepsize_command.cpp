@@ -14,7 +14,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include <chrono>
 #include <cstdio>
 #include <memory>
 
@@ -65,15 +64,10 @@ void stepsize(const StepsizeOptions& o)
   CcdParameters parameters;
   parameters.min_distance = o.min_separation;
   parameters.tolerance = o.tolerance;
-  // The first call builds the BVH's front; the rest are a line search's warm calls.
   double alpha = 0;
-  std::vector<double> ms;
-  for (unsigned call = 0; call <= o.repeat; ++call) {
-    const auto begin = std::chrono::steady_clock::now();
+  const std::vector<double> ms = warm_call_ms(o.repeat, [&] {
     alpha = ccd.collision_free_stepsize(a.positions, b.positions, o.min_separation, o.rescaling);
-    const std::chrono::duration<double, std::milli> took = std::chrono::steady_clock::now() - begin;
-    if (call > 0) ms.push_back(took.count());
-  }
+  });
   const double toi = ccd.toi(a.positions, b.positions, parameters);
   const bool free = alpha == 1.0;
 
