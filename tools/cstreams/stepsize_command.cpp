@@ -54,7 +54,9 @@ std::pair<Mesh, Mesh> read_step(const std::string& start, const std::string& end
 
 void stepsize(const StepsizeOptions& o)
 {
-  const auto [a, b] = read_step(o.start, o.end);
+  // Named, not bound: a lambda below captures them, which C++17 does not allow of bindings.
+  const std::pair<Mesh, Mesh> step = read_step(o.start, o.end);
+  const Mesh &a = step.first, &b = step.second;
   runtime::Context context(o.device.empty() ? filter_from_environment() : o.device);
   MeshCcdOptions options;
   options.solver = parse_solver(o.solver);
