@@ -14,6 +14,7 @@
  * rounding too. A pair is reported where that least distance is below dhat plus
  * CS_DISTANCE_ULPS units of rounding at the pair's scale, so that no pair closer than
  * dhat is missed. */
+#include "pairs.h"
 #include "real.h"
 #include "runtime/registration.h"
 #include "streams.h"
@@ -153,16 +154,10 @@ __kernel void cs_close_pairs(CS_FOUR_STREAMS(uint2), __global const real* x, __g
   uint2 pair;
   uint vertex_face;
   if (cs_stream_item_uint2(get_global_id(0), CS_FOUR_STREAM_ARGS, &pair, &vertex_face)) {
+    uint v[4];
+    cs_pair_vertices(pair, vertex_face, faces, edges, v);
     cs_v3 p[4];
-    if (vertex_face) {
-      p[0] = cs_load(x, pair.x);
-      for (int k = 0; k < 3; ++k) p[1 + k] = cs_load(x, faces[3 * pair.y + k]);
-    } else {
-      p[0] = cs_load(x, edges[2 * pair.x]);
-      p[1] = cs_load(x, edges[2 * pair.x + 1]);
-      p[2] = cs_load(x, edges[2 * pair.y]);
-      p[3] = cs_load(x, edges[2 * pair.y + 1]);
-    }
+    for (int k = 0; k < 4; ++k) p[k] = cs_load(x, v[k]);
     real scale = 0;
     for (int k = 0; k < 4; ++k) scale = fmax(scale, cs_magnitude(p[k]));
     int type;

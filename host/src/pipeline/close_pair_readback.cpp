@@ -29,17 +29,15 @@ ClosePair close_pair(const Record& r, const SceneLayout& layout, const FeatureId
   c.a = l.a;
   c.b = l.b;
   const Topology& t = layout.topology;
-  const std::uint32_t first_a = layout.slots[layout.slot_of[l.object_a]].first_vertex;
-  const std::uint32_t first_b = layout.slots[layout.slot_of[l.object_b]].first_vertex;
+  const ObjectSlot &slot_a = layout.slots[layout.slot_of[l.object_a]], &slot_b = layout.slots[layout.slot_of[l.object_b]];
+  const std::uint32_t first_a = slot_a.first_vertex, first_b = slot_b.first_vertex;
   if (c.kind == ContactKind::vertex_face) {
     const Face& face = t.faces[b];
     c.v = {a - first_a, face[0] - first_b, face[1] - first_b, face[2] - first_b};
     return c;
   }
-  // ids.local puts the edge of the smaller object first, as here.
-  const bool swapped = layout.vertex_object[t.edges[a][0]] != l.object_a;
-  const Edge& ea = t.edges[swapped ? b : a];
-  const Edge& eb = t.edges[swapped ? a : b];
+  const Edge& ea = t.edges[slot_a.first_edge + l.a];
+  const Edge& eb = t.edges[slot_b.first_edge + l.b];
   c.v = {std::min(ea[0], ea[1]) - first_a, std::max(ea[0], ea[1]) - first_a, std::min(eb[0], eb[1]) - first_b,
          std::max(eb[0], eb[1]) - first_b};
   return c;
