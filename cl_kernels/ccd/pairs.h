@@ -86,20 +86,23 @@ inline real cs_points_scale(const real q[24], const uint exact_input)
 }
 
 /* A contact: (feature a, feature b, time bits), the time as the bits of a double (low
- * word first) or of a float and a zero word. Built with CS_MARK_LIMIT, a contact that
- * only a solver limit reported carries its time negated (the sign bit: times are never
- * negative, and -0 keeps it), so a caller that counts limits can tell. */
-inline uint4 cs_contact(const uint2 p, real t, const uint status)
+ * word first) or of a float and a zero word; in float, rounded down, where the solver
+ * ran in double for a float caller (CS_CONTACT_FLOAT: refine.cl's escalation). Built
+ * with CS_MARK_LIMIT, a contact that only a solver limit reported carries its time
+ * negated (the sign bit: times are never negative, and -0 keeps it), so a caller that
+ * counts limits can tell. */
+inline uint4 cs_contact(const uint2 p, const real t, const uint status)
 {
 #if CS_MARK_LIMIT
-  if (status == CS_LIMIT) t = -t;
+  const real sign = status == CS_LIMIT ? (real)-1 : (real)1;
 #else
+  const real sign = 1;
   (void)status;
 #endif
-#if CS_REAL_DOUBLE
-  return (uint4)(p.x, p.y, as_uint2(t));
+#if CS_REAL_DOUBLE && !CS_CONTACT_FLOAT
+  return (uint4)(p.x, p.y, as_uint2(sign * t));
 #else
-  return (uint4)(p.x, p.y, as_uint(t), 0u);
+  return (uint4)(p.x, p.y, as_uint((float)sign * cs_float_down(t)), 0u);
 #endif
 }
 

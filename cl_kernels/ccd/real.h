@@ -38,6 +38,14 @@ inline real cs_down(real x) { return x - CS_ROUNDING_STEP(x); }
 inline real cs_up(real x) { return x + CS_ROUNDING_STEP(x); }
 inline real8 cs_up8(real8 x) { return x + CS_ROUNDING_STEP(x); }
 
+/* x >= 0 as the nearest float no greater: a time reported in float stays no later. */
+inline float cs_float_down(const real x)
+{
+  float f = (float)x;
+  if ((real)f > x) f = nextafter(f, 0.0f);
+  return f;
+}
+
 typedef struct {
   real lo, hi;
 } cs_interval;

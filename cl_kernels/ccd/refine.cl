@@ -22,11 +22,20 @@
  * can no longer hold its objects' earliest one is given up whole: its answer would
  * have been no earlier than a contact another query has found for each of its
  * objects. The queries that go on run exactly as they would have, so every object's
- * earliest time is the one the full list of contacts gives (cs_not_earliest). */
+ * earliest time is the one the full list of contacts gives (cs_not_earliest).
+ *
+ * Built with CS_ESCALATE (single precision, where the device has double): a contact
+ * is final only where a hit proved an exact zero (proof.h) no later than twice the
+ * query's answer, and is not a limit's; every other query the refinement would report
+ * goes to `escalated` instead, and the same search in double decides it (built with
+ * CS_CONTACT_FLOAT, ccd_graph.cpp). Its float answer stands for nothing then, so
+ * in earliest-only mode only a proven contact gives up other queries, by the end of
+ * its proof's box, which bounds the query's answer in either precision. */
 #include "conservative.h"
 #include "coplanarity.h"
 #include "cubic.h"
 #include "pairs.h"
+#include "proof.h"
 #include "runtime/registration.h"
 #include "runtime/worklist.h"
 
@@ -57,12 +66,7 @@
 #define CS_FINER_HALVINGS 3
 
 /* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
-inline uint cs_float_key_down(const real t)
-{
-  float f = (float)t;
-  if ((real)f > t) f = nextafter(f, 0.0f);
-  return as_uint(f);
-}
+inline uint cs_float_key_down(const real t) { return as_uint(cs_float_down(t)); }
 
 inline uint cs_float_key_up(const real t)
 {
@@ -108,8 +112,8 @@ typedef struct {
   cs_box box;
 } cs_item;
 
-/* 2 keys + 32 bytes, at most 2 reals + 32, and with CS_KEEP_FUNCTION 37 reals more
- * (host: add_elementary_tests). The seed looks up the query's vertices once: a round's
+/* 2 keys + 32 bytes, at most 2 reals + 32, 4 more with CS_ESCALATE, and with
+ * CS_KEEP_FUNCTION 37 reals more (host: add_refinement). The seed looks up the query's vertices once: a round's
  * visit of a box is a chain of dependent reads, one link shorter without the face's or
  * the edges' indices.
  * CS_KEEP_FUNCTION (set where the device is a CPU): the seed also makes the query's
@@ -123,6 +127,9 @@ typedef struct {
   uint work[3];
   uint flags;
   uint vertices[4];
+#if CS_ESCALATE
+  uint proven_end; /* the earliest end of a box a hit proved a zero in, as a float rounded up */
+#endif
 #if CS_KEEP_FUNCTION
   cs_trilinear f;
   real scale;
@@ -276,6 +283,9 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
   s.best[0] = s.best[1] = cs_key_of(2); /* no contact */
   s.work[0] = s.work[1] = s.work[2] = 0;
   s.flags = pair.z ? CS_FLAG_VERTEX_FACE : 0u;
+#if CS_ESCALATE
+  s.proven_end = CS_NO_TIME;
+#endif
   cs_pair_vertices(pair.xy, pair.z, faces, edges, s.vertices);
   real q[24];
   cs_vertex_points(s.vertices, x0, x1, q);
@@ -332,12 +342,13 @@ __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, 
 /* Round `round`'s visit of a box of a query whose state was `seen`, `work` boxes into
  * its search and `last_splits` of them halved last round: its function made (kept, or
  * again from the points), the work limits applied (past them the box answers
- * "collision" at its start, cs_visit_box), and the finer cuts of the late rounds. */
+ * "collision" at its start, cs_visit_box), and the finer cuts of the late rounds.
+ * *proven_end: with CS_ESCALATE, the end of the box a hit proved a zero in, else 2. */
 inline int cs_round_visit(const cs_refine_state* seen, const cs_box box, const uint round, const uint work,
                           const uint last_splits, __global const real* x0, __global const real* x1,
                           const uint exact_input, const real tolerance, const real separation,
                           const uint max_iterations, const real before, int* slack, int* limited, real* t,
-                          cs_box* lo, cs_box* hi, cs_cuts* cuts)
+                          cs_box* lo, cs_box* hi, cs_cuts* cuts, real* proven_end)
 {
   const int vertex_face = (seen->flags & CS_FLAG_VERTEX_FACE) != 0;
 #if CS_KEEP_FUNCTION
@@ -352,8 +363,16 @@ inline int cs_round_visit(const cs_refine_state* seen, const cs_box box, const u
   const int out_of_work = work >= max_iterations || round >= CS_MOST_ROUNDS || last_splits > CS_MOST_BOXES / 2;
   const int levels =
       round >= CS_CUT_FINER_FROM && last_splits << CS_FINER_HALVINGS <= CS_MOST_BOXES / 2 ? CS_FINER_HALVINGS : 1;
-  return cs_visit_box(&f, box, vertex_face, tolerance * scale, tolerance, separation, before, out_of_work, levels,
-                      slack, limited, t, lo, hi, cuts);
+  const int visit = cs_visit_box(&f, box, vertex_face, tolerance * scale, tolerance, separation, before,
+                                 out_of_work, levels, slack, limited, t, lo, hi, cuts);
+  *proven_end = 2;
+#if CS_ESCALATE
+  if (visit == CS_BOX_HIT && !*limited) {
+    const cs_box sought = cs_proof_box(box, vertex_face);
+    if (cs_zero_proven(&f, sought, vertex_face)) *proven_end = sought.t1;
+  }
+#endif
+  return visit;
 }
 
 /* The boxes a visit leaves into the next round's list: its two halves, the narrowed box,
@@ -380,19 +399,26 @@ inline void cs_round_store(__local uint* group, __global uint* counts, const uin
 #if CS_EARLIEST_ACROSS
 /* In earliest-only mode, after a visit: the next round's first start reset, the first
  * start of the boxes it leaves (lo, or the one cut, starts no later), and a contact's
- * time for its objects. */
+ * time for its objects (with CS_ESCALATE, a proven one's end of proof). */
 inline void cs_round_earliest(__global uint* first, const uint round, const int visit, const real lo_start,
-                              const real t, const cs_refine_state* seen, __global const uint* vertex_object,
-                              volatile __global uint* found)
+                              const real t, const real proven_end, const cs_refine_state* seen,
+                              __global const uint* vertex_object, volatile __global uint* found)
 {
   first[(round + 1) % 3] = CS_NO_TIME;
   if (visit >= CS_BOX_SPLIT) {
     const uint start = cs_float_key_down(lo_start);
     if (start < first[round % 3]) atomic_min(&first[round % 3], start);
   }
-  if (visit == CS_BOX_HIT) {
+#if CS_ESCALATE
+  const real contact = proven_end;
+  (void)t;
+#else
+  const real contact = t;
+  (void)proven_end;
+#endif
+  if (visit == CS_BOX_HIT && contact <= 1) {
     const uint2 o = cs_query_objects(seen, vertex_object);
-    const uint key = cs_float_key_up(t);
+    const uint key = cs_float_key_up(contact);
     cs_found_at(found, o.x, key, round);
     cs_found_at(found, o.y, key, round);
   }
@@ -421,7 +447,7 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       const uint last_splits = seen.work[(round + 2) % 3]; /* this round's boxes, halved */
       const uint work = it.work + last_splits;
       int slack = 0, limited = 0;
-      real t = before;
+      real t = before, proven_end = 2;
 #if CS_EARLIEST_ACROSS
       __global uint* first = cs_first_starts(state, n, it.query);
       const int given_up = earliest_only && cs_not_earliest(&seen, first, round, before, tolerance, vertex_object, found);
@@ -432,12 +458,18 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       /* Not a box after the step: the seed's of a query that is never coplanar. */
       if (!given_up && it.box.t0 <= 1)
         visit = cs_round_visit(&seen, it.box, round, work, last_splits, x0, x1, exact_input, tolerance, separation,
-                               max_iterations, before, &slack, &limited, &t, &lo.box, &hi.box, &cuts);
+                               max_iterations, before, &slack, &limited, &t, &lo.box, &hi.box, &cuts, &proven_end);
       cs_key_lower(&s->best[now], seen.best[now], cs_key_of(visit == CS_BOX_HIT ? fmin(before, t) : before));
       /* After the visit: issued before it, this store to a word that every box of the
        * query writes made cloth-ball's refinement a third slower in single precision. */
       s->work[(round + 1) % 3] = 0;
       if (slack || limited) atomic_or(&s->flags, (slack ? CS_FLAG_SLACK : 0u) | (limited ? CS_FLAG_LIMIT : 0u));
+#if CS_ESCALATE
+      if (proven_end <= 1) {
+        const uint end = cs_float_key_up(proven_end);
+        if (end < seen.proven_end) atomic_min(&s->proven_end, end);
+      }
+#endif
       if (visit >= CS_BOX_SPLIT) {
         if (!replay) atomic_add(&s->work[round % 3], visit == CS_BOX_CUT ? cs_pieces(cuts) / 2 : 1u);
         lo.query = hi.query = it.query;
@@ -445,7 +477,7 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
       }
 #if CS_EARLIEST_ACROSS
       if (earliest_only)
-        cs_round_earliest(first, round, visit, lo.box.t0, t, &seen, vertex_object, found);
+        cs_round_earliest(first, round, visit, lo.box.t0, t, proven_end, &seen, vertex_object, found);
 #endif
     }
     cs_round_store(group, counts, round, capacity, visit, lo, hi, cuts, out);
@@ -453,12 +485,29 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
   cs_worklist_check_loops(counts, round);
 }
 
-/* Each query's answer, once no box of it is left, into the contacts of its kind. */
+#if CS_ESCALATE
+#define CS_ESCALATED_PARAMS , CS_EMITTER_PARAMS(uint4, escalated)
+/* A contact stands where a hit proved a zero no later than twice its time (so its time
+ * is at least half the exact one) and no limit cut the search short. */
+inline int cs_contact_stands(const cs_refine_state* s, const uint status, const real t)
+{
+  return status == CS_COLLIDES && t >= (real)0.5 * (real)as_float(s->proven_end);
+}
+#else
+#define CS_ESCALATED_PARAMS
+#endif
+
+/* Each query's answer, once no box of it is left, into the contacts of its kind (with
+ * CS_ESCALATE, the queries it does not settle into `escalated`, as they came). */
 __kernel void cs_refine_finish(CS_REFINE_PARAMS, __global const cs_refine_state* state,
-                               CS_EMITTER_PARAMS(uint4, vf_contacts), CS_EMITTER_PARAMS(uint4, ee_contacts))
+                               CS_EMITTER_PARAMS(uint4, vf_contacts),
+                               CS_EMITTER_PARAMS(uint4, ee_contacts) CS_ESCALATED_PARAMS)
 {
   CS_EMITTER_BEGIN(vf_contacts);
   CS_EMITTER_BEGIN(ee_contacts);
+#if CS_ESCALATE
+  CS_EMITTER_BEGIN(escalated);
+#endif
   const uint i = get_global_id(0);
   if (i < n) {
     const cs_refine_state s = state[i];
@@ -466,11 +515,22 @@ __kernel void cs_refine_finish(CS_REFINE_PARAMS, __global const cs_refine_state*
     const uint status = (s.flags & CS_FLAG_LIMIT) ? CS_LIMIT : best <= 1 ? CS_COLLIDES : CS_SEPARATE;
     if (status != CS_SEPARATE && !(s.flags & CS_FLAG_NOT_EARLIEST)) {
       const uint4 q = queries[i];
-      const uint4 contact = cs_contact(q.xy, cs_final_time(best, s.flags & CS_FLAG_SLACK, tolerance), status);
-      if (q.z) CS_EMIT(vf_contacts, contact);
-      else CS_EMIT(ee_contacts, contact);
+      const real t = cs_final_time(best, s.flags & CS_FLAG_SLACK, tolerance);
+#if CS_ESCALATE
+      if (!cs_contact_stands(&s, status, t)) {
+        CS_EMIT(escalated, q);
+      } else
+#endif
+      {
+        const uint4 contact = cs_contact(q.xy, t, status);
+        if (q.z) CS_EMIT(vf_contacts, contact);
+        else CS_EMIT(ee_contacts, contact);
+      }
     }
   }
   CS_EMITTER_END(vf_contacts);
   CS_EMITTER_END(ee_contacts);
+#if CS_ESCALATE
+  CS_EMITTER_END(escalated);
+#endif
 }

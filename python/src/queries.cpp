@@ -55,18 +55,19 @@ void bind_queries(py::module_& m)
   py::class_<DeviceSolver>(m, "QuerySolver",
                            "The device's elementary solvers over batches of queries, as the pipeline runs them.")
       .def(py::init([](runtime::Context& device, const std::string& solver, const std::string& precision,
-                       double tolerance, double min_separation, std::uint32_t max_iterations) {
+                       double tolerance, double min_separation, std::uint32_t max_iterations, bool escalate) {
              SolverOptions o;
              o.solver = parse_solver(solver);
              o.precision = parse_precision(precision);
              o.tolerance = tolerance;
              o.min_separation = min_separation;
              o.max_iterations = max_iterations;
+             o.escalate = escalate;
              return std::make_unique<DeviceSolver>(device, o);
            }),
            py::arg("context"), py::arg("solver") = "conservative", py::arg("precision") = "single",
            py::arg("tolerance") = d.tolerance, py::arg("min_separation") = 0.0,
-           py::arg("max_iterations") = d.max_iterations, py::keep_alive<1, 2>())
+           py::arg("max_iterations") = d.max_iterations, py::arg("escalate") = d.escalate, py::keep_alive<1, 2>())
       .def(
           "solve",
           [](DeviceSolver& s, const std::string& kind, const py::array& points) {

@@ -139,7 +139,14 @@ TEST_CASE("earliest times alone equal the full list's, object by object, with le
       if (precision == Precision::single) {
         const EarliestRun touching = compare_earliest(funnel, 1, options, cstreams::test::device(), touching_start);
         CHECK(touching.at_zero == 1);
-        CHECK(touching.earliest_boxes < touching.all_boxes / 4);
+        // A vertex on a vertex is a contact no float enclosure proves (proof.h): with
+        // escalation, only proven contacts give queries up, and this one gives none.
+        DetectorOptions in_float = options;
+        in_float.solver.escalate = false;
+        const EarliestRun float_only =
+            compare_earliest(funnel, 1, in_float, cstreams::test::device(), touching_start);
+        CHECK(float_only.at_zero == 1);
+        CHECK(float_only.earliest_boxes < float_only.all_boxes / 4);
       }
     }
 }
@@ -151,6 +158,7 @@ std::vector<Contact> step_contacts(const Scene& scene, const Vec3& shift, Precis
 {
   DetectorOptions options;
   options.solver.precision = precision;
+  options.solver.escalate = false;
   SceneDescription start = describe(scene, 0);
   for (std::uint32_t o = 0; o < scene.objects.size(); ++o) start.objects[o].positions = shifted(scene, o, 0, shift);
   Detector detector(cstreams::test::device(), start, options);
@@ -172,7 +180,8 @@ double earliest(const std::vector<Contact>& contacts)
 // (round_to_float, CcdStreams::exact_floats) rather than within half an ulp. The
 // funnel's frames are floats: in single precision it must then report every pair that
 // double precision does, no later, and few more. The same floats taken as rounded (the
-// positions moved by 2^-40, under half an ulp) report more than twice as many.
+// positions moved by 2^-40, under half an ulp) report more than twice as many where no
+// contact goes to double (escalation off: test_escalation.cpp has it on).
 TEST_CASE("single precision takes positions that are floats as the input itself", "[detector][quick]")
 {
   const Scene funnel = cstreams::test::cloth_funnel();

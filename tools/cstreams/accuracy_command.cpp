@@ -35,6 +35,7 @@ struct AccuracyOptions {
   double min_separation = 0;
   std::uint32_t max_iterations = SolverOptions{}.max_iterations;
   bool no_filter = false;
+  bool no_escalation = false;
   int repeat = 5;
   std::string device;
   std::vector<std::string> devices;
@@ -48,6 +49,10 @@ struct Row {
   std::size_t queries = 0, positives = 0, false_negatives = 0, false_positives = 0, filtered = 0, limits = 0;
   std::size_t toi_known = 0, toi_late = 0;
   double toi_error_max = 0, toi_error_median = 0, ns_per_query = 0;
+  // The earliest time reported, and the earliest exact time of the queries whose time is
+  // known (NaN: none): a simulator backs up to the first, and stalls where it is 0 and
+  // the second is not.
+  double earliest = std::numeric_limits<double>::quiet_NaN(), exact_earliest = std::numeric_limits<double>::quiet_NaN();
   std::vector<bool> answers;  // per query: collides
 };
 
@@ -79,6 +84,9 @@ Row measure(DeviceSolver& solver, const runtime::DeviceInfo& device, const Datas
     row.filtered += r.status == QueryStatus::filtered;
     row.limits += r.status == QueryStatus::limit;
     row.answers.push_back(r.collides());
+    if (r.collides() && !(r.toi >= row.earliest)) row.earliest = r.toi;
+    if (!std::isnan(d.exact_toi[i]) && !(double(d.exact_toi[i]) >= row.exact_earliest))
+      row.exact_earliest = double(d.exact_toi[i]);
     if (d.collides[i] && !r.collides()) ++row.false_negatives;
     if (!d.collides[i] && r.collides()) ++row.false_positives;
     if (d.collides[i] && r.collides() && !std::isnan(d.exact_toi[i])) {
@@ -117,6 +125,8 @@ nlohmann::json to_json(const Row& r)
           {"toi_error_max", toi_max},
           {"toi_error_median", toi_median},
           {"toi_later_than_exact", r.toi_late},
+          {"earliest", std::isnan(r.earliest) ? nlohmann::json() : nlohmann::json(r.earliest)},
+          {"exact_earliest", std::isnan(r.exact_earliest) ? nlohmann::json() : nlohmann::json(r.exact_earliest)},
           {"ns_per_query", timed ? nlohmann::json(r.ns_per_query) : nlohmann::json()},
           {"queries_per_second", !timed ? nlohmann::json() : nlohmann::json(r.ns_per_query > 0 ? 1e9 / r.ns_per_query : 0.0)}};
 }
@@ -145,6 +155,22 @@ void check(const AccuracyOptions& o)
   check_option("--max-iterations", o.max_iterations, option_ranges::max_iterations);
   if (!o.json.empty()) check_output_path("--json", o.json);
   if (!o.plot.empty()) check_output_path("--plot", o.plot);
+}
+
+// The earliest time of the sets whose exact times are known (the real steps') against
+// the exact one.
+void print_earliest(const std::vector<Row>& rows)
+{
+  bool header = false;
+  for (const Row& r : rows) {
+    if (std::isnan(r.exact_earliest)) continue;
+    if (!header) std::printf("\nearliest time against the exact one (sets with exact times):\n");
+    header = true;
+    std::printf("  %-36s %-2s %-12s %-6s %13.7g / %-13.7g (%.4f of it)\n", r.dataset.c_str(), r.kind.c_str(),
+                r.solver.c_str(), r.precision.c_str(), r.earliest, r.exact_earliest,
+                r.exact_earliest > 0 ? r.earliest / r.exact_earliest : r.earliest == 0 ? 1.0 : 0.0);
+  }
+  std::printf("\n");
 }
 
 // One device's table: every solver, precision and tolerance asked for, on every dataset.
@@ -187,6 +213,7 @@ std::vector<Row> run_on(const std::string& filter, const AccuracyOptions& o, con
         options.min_separation = o.min_separation;
         options.max_iterations = o.max_iterations;
         options.filter = !o.no_filter;
+        options.escalate = !o.no_escalation;
         DeviceSolver solver(context, options);
         for (const auto& d : datasets) {
           rows.push_back(measure(solver, device, d, o.repeat));
@@ -195,7 +222,7 @@ std::vector<Row> run_on(const std::string& filter, const AccuracyOptions& o, con
         }
       }
     }
-  std::printf("\n");
+  print_earliest(rows);
   return rows;
 }
 
@@ -290,6 +317,9 @@ void add_accuracy_command(CLI::App& app, Command& command)
   cmd->add_option("--min-separation", o->min_separation, "Minimum separation (conservative solver)");
   cmd->add_option("--max-iterations", o->max_iterations, "Conservative solver's work limit per query");
   cmd->add_flag("--no-filter", o->no_filter, "Do not run the non-penetration filter");
+  cmd->add_flag("--no-escalation", o->no_escalation,
+                "Single precision: report the contacts float cannot prove as they are, rather than deciding them "
+                "again in double");
   cmd->add_option("--repeat", o->repeat, "Timed repeats after one warm-up (median reported)")->check(CLI::PositiveNumber);
   auto* device = cmd->add_option("--device", o->device, "Device filter (default: CSTREAMS_DEVICE)");
   cmd->add_option("--devices", o->devices,

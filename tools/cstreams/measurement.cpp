@@ -58,6 +58,7 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
           {"vf_candidates", s.vf_candidates},
           {"ee_candidates", s.ee_candidates},
           {"contacts", s.contacts},
+          {"escalated", s.escalated},
           {"front_pairs", s.front_pairs},
           {"front_level_cap", s.front_level_cap},
           {"front_retries", s.front_retries},
@@ -86,6 +87,9 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
   cmd.add_option("--min-separation", o.min_separation, "Distance below which primitives count as colliding");
   cmd.add_option("--max-iterations", o.max_iterations,
                  "Conservative solver's work limit per pair; reaching it reports a collision");
+  cmd.add_flag("--no-escalation", o.no_escalation,
+               "Single precision: report the contacts float cannot prove as they are, rather than deciding them "
+               "again in double");
   cmd.add_option("--front", o.front, "BVTT front: none, exact or deferred");
   cmd.add_option("--front-budget", o.front_budget, "Deferred front: device memory for the front, MiB");
   cmd.add_option("--memory-budget", o.memory_budget,
@@ -109,6 +113,7 @@ DetectorOptions detector_options(const MeasureOptions& o)
   options.solver.tolerance = o.tolerance;
   options.solver.min_separation = o.min_separation;
   options.solver.max_iterations = o.max_iterations;
+  options.solver.escalate = !o.no_escalation;
   options.front = parse_front_mode(o.front);
   options.front_budget_mb = o.front_budget;
   options.registration = runtime::parse_registration(o.registration);

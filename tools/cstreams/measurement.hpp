@@ -27,6 +27,7 @@ struct MeasureOptions {
   double tolerance = SolverOptions{}.tolerance;
   double min_separation = 0;
   std::uint32_t max_iterations = SolverOptions{}.max_iterations;
+  bool no_escalation = false;
   double front_budget = DetectorOptions{}.front_budget_mb;
   // Device memory the whole pipeline may hold, MiB (Context::set_memory_limit); 0: all
   // the device has. Under it, registration gives segments back and falls back to one

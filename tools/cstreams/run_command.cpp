@@ -69,12 +69,13 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
 // Per step and per pass, for --passes.
 void print_tables(Measurement& report)
 {
-  std::printf("\n%6s %10s %10s %10s %9s %10s %9s %9s %9s %9s\n", "step", "tri pairs", "vf cand", "ee cand", "contacts",
-              "front", "held MiB", "peak MiB", "device ms", "step ms");
+  std::printf("\n%6s %10s %10s %10s %9s %9s %10s %9s %9s %9s %9s\n", "step", "tri pairs", "vf cand", "ee cand",
+              "contacts", "escalated", "front", "held MiB", "peak MiB", "device ms", "step ms");
   for (const auto& s : report.steps)
-    std::printf("%6zu %10zu %10zu %10zu %9zu %10zu %9.1f %9.1f %9.3f %9.3f\n", s["frame"].get<std::size_t>(),
+    std::printf("%6zu %10zu %10zu %10zu %9zu %9zu %10zu %9.1f %9.1f %9.3f %9.3f\n", s["frame"].get<std::size_t>(),
                 s["triangle_pairs"].get<std::size_t>(), s["vf_candidates"].get<std::size_t>(),
                 s["ee_candidates"].get<std::size_t>(), s["contacts"].get<std::size_t>(),
+                s["escalated"].get<std::size_t>(),
                 s["front_pairs"].get<std::size_t>(), s["device_bytes"].get<double>() / (1 << 20),
                 s["peak_bytes"].get<double>() / (1 << 20), s["device_ms"].get<double>(), s["host_ms"].get<double>());
   std::printf("\nmedian device time per pass (ms):\n");

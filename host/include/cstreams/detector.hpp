@@ -124,6 +124,9 @@ struct DetectorStats {
   // With Report::earliest_toi, the solvers settle only the pairs that may hold an
   // object's earliest time, and this counts their contacts alone.
   std::size_t contacts = 0;
+  // Conservative solver in single precision: the queries whose float answer was not
+  // proven and that ran again in double (SolverOptions::escalate).
+  std::size_t escalated = 0;
   double host_ms = 0;               // wall time of the last detect(), uploads and readbacks included
   unsigned launches = 0;            // kernel launches of the last detect(), every one
   unsigned blocking_reads = 0;      // and its blocking reads (counters, flags, contacts)

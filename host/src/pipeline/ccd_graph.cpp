@@ -11,205 +11,16 @@ namespace cstreams {
 
 namespace {
 
-// Positions, topology and whether the positions are the exact input, which every kernel
-// over queries takes after its queries: double positions always are, float ones where
-// the step's parameter says so.
-runtime::PassSpec& geometry_args(runtime::PassSpec& pass, const TestInputs& in, Precision precision)
-{
-  using namespace runtime;
-  pass.arg(buffer_of(in.x0)).arg(buffer_of(in.x1)).arg(buffer_of(in.faces)).arg(buffer_of(in.edges));
-  return precision == Precision::double_ ? pass.arg(value_of(cl_uint(1))) : pass.arg(param_of(in.exact_floats));
-}
-
-// A pass over every candidate (or contact) stream of a step in one launch
-// (cs_cubic_pairs, cs_screen_pairs, cs_earliest_toi) launches over them all and takes
-// their triples as its first arguments.
-void over_streams(runtime::PassSpec& pass, const std::vector<std::pair<runtime::StreamId, ContactKind>>& streams,
-                  const char* what)
-{
-  using namespace runtime;
-  std::vector<StreamId> over;
-  for (const auto& s : streams) over.push_back(s.first);
-  bind_four_streams(streams, what, [&](StreamId stream, bool used, cl_uint vertex_face) {
-    pass.arg(buffer_of(stream)).arg(used ? count_of(stream) : value_of(cl_uint(0))).arg(value_of(vertex_face));
-  });
-  pass.launch_over(over);
-}
-
-}  // namespace
-
-runtime::PassSpec& pair_kernel_args(runtime::PassSpec& pass, const TestInputs& in, runtime::StreamId pairs,
-                                    ContactKind kind, Precision precision)
-{
-  using namespace runtime;
-  pass.arg(buffer_of(pairs)).arg(count_of(pairs)).arg(value_of(cl_uint(kind == ContactKind::vertex_face)));
-  return geometry_args(pass, in, precision);
-}
-
-runtime::PassSpec& real_arg(runtime::PassSpec& pass, double x, Precision precision)
-{
-  using runtime::value_of;
-  return precision == Precision::double_ ? pass.arg(value_of(x)) : pass.arg(value_of(float_above(x)));
-}
-
-namespace {
-
-using ContactStreams = std::vector<std::pair<runtime::StreamId, ContactKind>>;
-using Sized = std::function<std::size_t(std::size_t)>;
-
-// Whether the conservative screen runs in float on inputs rounded outward: in double
-// precision, where the graph has the positions in float too (TestInputs::x0_float). The
-// refinement then runs the non-penetration filter the screen left out.
-bool screens_in_float(const TestInputs& in, const SolverOptions& solver)
-{
-  return solver.precision == Precision::double_ && in.x0_float != runtime::StreamId{};
-}
-
-// The cubic solver's one pass over every candidate stream.
-void add_cubic_test(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver,
-                    const std::string& options, const ContactStreams& contacts)
-{
-  using namespace runtime;
-  const StreamId vf = contacts[0].first, ee = contacts[1].first;
-  // In a scene of objects, in the steps that report earliest times alone, the test
-  // lowers each object's time itself and skips the pairs that cannot lower it.
-  const bool objects = in.earliest != StreamId{};
-  const std::string cubic_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "");
-  auto& test = g.pass("test candidates", {"ccd/narrow_phase_pairs.cl", "cs_cubic_pairs", cubic_options})
-                   .emit(vf)
-                   .emit(ee)
-                   .emits_in_any_order()
-                   .expect_items(0.25);
-  over_streams(test, in.candidates, "the cubic solver");
-  real_arg(real_arg(geometry_args(test, in, solver.precision), solver.tolerance, solver.precision),
-           solver.min_separation, solver.precision)
-      .arg(value_of(cl_uint(solver.filter)));
-  if (objects)
-    test.instead_while(in.earliest_only, "cs_cubic_earliest_pairs")
-        .lower(in.earliest)
-        .arg(buffer_of(in.vertex_object))
-        .arg(buffer_of(in.earliest));
-}
-
-// The conservative solver refines what its screen leaves open as one work list, so
-// that its rounds are paid once a step. This is the screen; it emits the queries it
-// leaves open. In double it runs in float (inputs rounded outward, so that it settles
-// only what is certain), at float's cost, and the refinement's seed and first round do
-// in double what a second screen would: on n-body a screen in double after the float
-// one settled 91 of the 1.19M pairs that the float one left open, for 0.42 ms.
-runtime::StreamId add_conservative_screen(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver,
-                                          const std::string& options, const Sized& sized)
-{
-  using namespace runtime;
-  const StreamId open = g.variable("open queries", 16, sized(1024));
-  const bool in_float = screens_in_float(in, solver);
-  SolverOptions float_solver = solver;
-  float_solver.precision = Precision::single;
-  const std::string screen_options = in_float ? solver_build_options(float_solver) : options;
-  auto& test = g.pass(in_float ? "test candidates in float" : "test candidates",
-                      {"ccd/narrow_phase_pairs.cl", "cs_screen_pairs", screen_options})
-                   .emit(open)
-                   // The refinement answers each query on its own, so it takes them
-                   // in any order.
-                   .emits_in_any_order()
-                   .expect_items(0.5);
-  over_streams(test, in.candidates, "the conservative screen");
-  if (in_float) {
-    TestInputs rounded = in;
-    rounded.x0 = in.x0_float;
-    rounded.x1 = in.x1_float;
-    real_arg(geometry_args(test, rounded, Precision::single), solver.min_separation, Precision::single);
-  } else {
-    real_arg(geometry_args(test, in, solver.precision), solver.min_separation, solver.precision);
-  }
-  test.arg(value_of(cl_uint(solver.filter)));
-  return open;
-}
-
-// The refinement of the open queries: one box a work-item, breadth first across the
-// device (refine.cl). An item is a query index, its work and a box of six reals; the
-// state of a query two keys of at most one real each (a float on devices without 64-bit
-// atomics) and eight words, and in a scene of objects three more for the steps that
-// report earliest times alone. On a CPU the state also keeps the query's function, 37
-// reals (CS_KEEP_FUNCTION in refine.cl).
-void add_refinement(runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, const GraphDevice& device,
-                    const std::string& options, runtime::StreamId open, const ContactStreams& contacts)
-{
-  using namespace runtime;
-  const StreamId vf = contacts[0].first, ee = contacts[1].first;
-  // The round kernel is heavy in registers (255 a work-item in double on the H200): in
-  // groups of 64 several groups share an SM, and 64 measured best against 32, 128 and
-  // 256 (BENCHMARKS.md).
-  constexpr std::size_t refine_group = 64;
-  const bool in_float = screens_in_float(in, solver);
-  const std::size_t real_bytes = solver.precision == Precision::double_ ? 8 : 4;
-  runtime::Worklist boxes{"cs_refine_seed",
-                          "cs_refine_round",
-                          8 + 6 * real_bytes,
-                          2 * real_bytes + 32 + (device.cpu ? 37 * real_bytes : 0),
-                          device.refine_items,
-                          refine_group};
-  const bool objects = in.object_contacts != StreamId{};
-  if (objects) {
-    boxes.extra_state_bytes = 12;
-    boxes.extra_state_while = in.earliest_only;
-  }
-  const std::string refine_options =
-      options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") + (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "");
-  auto& pass = g.pass("refine open queries", {"ccd/refine.cl", "cs_refine_finish", refine_options})
-                   .launch_over(open)
-                   .refine(boxes)
-                   .emit(vf)
-                   .emit(ee)
-                   .emits_in_any_order()
-                   .expect_items(0.5);
-  pass.arg(buffer_of(open)).arg(count_of(open));
-  real_arg(real_arg(geometry_args(pass, in, solver.precision), solver.tolerance, solver.precision),
-           solver.min_separation, solver.precision)
-      .arg(value_of(cl_uint(solver.max_iterations)))
-      .arg(value_of(cl_uint(solver.filter && in_float)));
-  if (objects)
-    pass.write(in.object_contacts)
-        .arg(param_of(in.earliest_only))
-        .arg(buffer_of(in.vertex_object))
-        .arg(buffer_of(in.object_contacts));
-}
-
-}  // namespace
-
-std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
-    runtime::StreamGraph& g, const TestInputs& in, const SolverOptions& solver, const GraphDevice& device,
-    const std::function<std::size_t(std::size_t)>& sized, bool mark_limits)
-{
-  using namespace runtime;
-  const std::string options = solver_build_options(solver) + (mark_limits ? " -DCS_MARK_LIMIT=1" : "");
-  // Every candidate stream goes through one pass: small streams (the orphans') in
-  // launches of their own would each cost a launch, whatever their work.
-  const StreamId vf = g.variable("vf contacts", 16, sized(256)), ee = g.variable("ee contacts", 16, sized(256));
-  g.gather(vf);
-  g.gather(ee);
-  // Contacts are read sorted (contacts.cl), by their minimum (earliest.cl) or by their
-  // query (narrow_phase.cpp), so their passes emit them in any order.
-  const ContactStreams contacts = {{vf, ContactKind::vertex_face}, {ee, ContactKind::edge_edge}};
-  if (solver.solver == Solver::cubic) {
-    add_cubic_test(g, in, solver, options, contacts);
-  } else {
-    const StreamId open = add_conservative_screen(g, in, solver, options, sized);
-    add_refinement(g, in, solver, device, options, open, contacts);
-  }
-  return contacts;
-}
-
-namespace {
-
 constexpr const char* broad_phase_program = "ccd/broad_phase.cl";
 
 // Builds one scene's graph piece by piece; each step adds the streams and passes of
 // one stage of the pipeline and leaves those a scene does not need unset.
 struct GraphBuilder {
-  GraphBuilder(const SceneLayout& layout, const DetectorOptions& options)
+  GraphBuilder(const SceneLayout& layout, const DetectorOptions& options, const GraphDevice& device)
       : l(layout), solver(options.solver), options(options), t(layout.topology),
-        exact_input(solver.precision == Precision::double_), separation(float_above(bounds_margin(options)))
+        exact_input(solver.precision == Precision::double_),
+        exact_twins(exact_input || (options.detects == Detects::contacts && escalates(solver, device))),
+        separation(float_above(bounds_margin(options)))
   {
   }
 
@@ -218,6 +29,7 @@ struct GraphBuilder {
   const DetectorOptions& options;
   const Topology& t;
   const bool exact_input;
+  const bool exact_twins;  // positions in double beside the float ones: double precision, or escalation
   const float separation;
   CcdGraph out;
   runtime::StreamGraph& g = out.graph;
@@ -238,7 +50,7 @@ struct GraphBuilder {
     s.x_next = g.fixed("x next", 12, 0);
     s.x0_next = g.fixed("x0 next", 12, 0);
     s.exact_floats = g.param("positions are floats", 4);
-    if (exact_input) {
+    if (exact_twins) {
       s.x0_double = g.fixed("x0 double", 24, nv);
       s.x1_double = g.fixed("x1 double", 24, nv);
       s.x_next_double = g.fixed("x next double", 24, 0);
@@ -418,6 +230,10 @@ struct GraphBuilder {
     in.x1 = exact_input ? s.x1_double : s.x1;
     in.x0_float = s.x0;
     in.x1_float = s.x1;
+    if (!exact_input) {
+      in.x0_exact = s.x0_double;
+      in.x1_exact = s.x1_double;
+    }
     in.exact_floats = s.exact_floats;
     in.faces = s.faces;
     in.edges = s.edges;
@@ -433,7 +249,9 @@ struct GraphBuilder {
       s.object_contacts = g.fixed("earliest contact found", 8, l.slots.size());
       in.object_contacts = s.object_contacts;
     }
-    s.contacts = add_elementary_tests(g, in, solver, device, [this](std::size_t guess) { return sized(guess); });
+    TestStreams tests = add_elementary_tests(g, in, solver, device, [this](std::size_t guess) { return sized(guess); });
+    s.contacts = std::move(tests.contacts);
+    s.escalated = tests.escalated;
   }
 
   // Proximity instead of the tests: the distance of every candidate pair, one pass over
@@ -489,6 +307,7 @@ GraphDevice graph_device(const runtime::Context& context)
   GraphDevice on;
   on.refine_items = 8 * context.device().compute_units * context.work_group_size();
   on.work_group_size = context.work_group_size();
+  on.fp64 = context.device().fp64;
   on.cpu = context.device().kind == runtime::DeviceKind::cpu;
   on.bounded_loops = context.loop_trip_limit() != 0;
   // Capped registers let more work-items share a compute unit. On the H200 the front
@@ -506,7 +325,7 @@ CcdGraph build_ccd_graph(const SceneLayout& layout, const DetectorOptions& optio
                          const GraphDevice& device)
 {
   if (options.solver.min_separation < 0) throw InputError("the minimum separation must not be negative");
-  GraphBuilder b(layout, options);
+  GraphBuilder b(layout, options, device);
   b.geometry_streams();
   RefitPlan refit = plan_refit(layout, device.work_group_size);
   b.bounds_and_refit(device.work_group_size, refit);

@@ -515,6 +515,7 @@ void Detector::run_step(Report report)
   stats.triangle_pairs = items(st.triangle_pairs);
   stats.vf_candidates = items(st.vf) + items(st.kept_vf);
   stats.ee_candidates = items(st.ee) + items(st.kept_ee);
+  stats.escalated = items(st.escalated);
   stats.contacts = 0;
   for (const auto& c : st.contacts) stats.contacts += s.count(c.first);
   stats.peak_bytes = s.context.memory_high_water();

@@ -59,6 +59,11 @@ struct DeviceSolver::Graph {
     in.faces = g.fixed("faces", 12, 0);
     in.edges = g.fixed("edges", 8, 0);
     in.exact_floats = g.param("queries are floats", 4);
+    const GraphDevice device = graph_device(context);
+    if (options.precision == Precision::single && escalates(options, device)) {
+      x0_exact = in.x0_exact = g.fixed("x0 double", 24, 0);
+      x1_exact = in.x1_exact = g.fixed("x1 double", 24, 0);
+    }
     pairs = g.fixed("queries", 8, 0);
     culled = g.fixed("culled by the filter", 4, 0);
     in.candidates = {{pairs, kind}};
@@ -69,7 +74,7 @@ struct DeviceSolver::Graph {
         .arg(value_of(cl_uint(options.filter)))
         .arg(buffer_of(culled));
     const auto as_guessed = [](std::size_t guess) { return guess; };
-    for (const auto& c : add_elementary_tests(g, in, options, graph_device(context), as_guessed, true))
+    for (const auto& c : add_elementary_tests(g, in, options, device, as_guessed, true).contacts)
       contacts.push_back(c.first);
     x0 = in.x0;
     x1 = in.x1;
@@ -80,7 +85,7 @@ struct DeviceSolver::Graph {
   }
 
   ContactKind kind;
-  runtime::StreamId x0, x1, faces, edges, pairs, culled;
+  runtime::StreamId x0, x1, x0_exact, x1_exact, faces, edges, pairs, culled;
   runtime::ParamId exact_floats;
   std::vector<runtime::StreamId> contacts;
   std::unique_ptr<runtime::Scheduler> scheduler;
@@ -163,6 +168,10 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
     s.upload(g.x0, f0.rounded.data(), start.size());
     s.upload(g.x1, f1.rounded.data(), end.size());
     s.set(g.exact_floats, cl_uint(f0.exact && f1.exact));
+    if (g.x0_exact != runtime::StreamId{}) {
+      s.upload(g.x0_exact, start);
+      s.upload(g.x1_exact, end);
+    }
   }
   s.upload(g.faces, faces);
   s.upload(g.edges, edges);

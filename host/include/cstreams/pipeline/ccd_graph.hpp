@@ -33,6 +33,7 @@ struct CcdStreams {
   runtime::StreamId earliest;
   runtime::StreamId object_contacts;  // refine.cl's `found`: per object, the earliest contact so far
   runtime::StreamId close_pairs;  // proximity.cl's (kind << 31 | a, b, distance bits, type)
+  runtime::StreamId escalated;    // the float refinement's queries re-run in double (escalates())
   runtime::ParamId level_cap;
   runtime::ParamId earliest_only;     // 1: the step reports only each object's earliest time
   runtime::ParamId exact_floats;      // 1: the float positions are the input itself (no rounding)
@@ -48,6 +49,9 @@ struct CcdStreams {
 struct TestInputs {
   runtime::StreamId x0, x1, faces, edges;
   runtime::StreamId x0_float, x1_float;
+  // In single precision, the positions in double where the solver escalates
+  // (escalates()): the queries a float refinement cannot decide run again on them.
+  runtime::StreamId x0_exact, x1_exact;
   runtime::ParamId exact_floats;
   std::vector<std::pair<runtime::StreamId, ContactKind>> candidates;
   // A scene of objects: every vertex's object, and a 4-byte parameter. Where the
@@ -74,6 +78,7 @@ struct GraphDevice {
   std::size_t refine_items = 1 << 14;  // work-items of the conservative solver's refinement
                                        // rounds: enough work-groups to fill the device
   std::size_t work_group_size = 256;   // the scheduler's work-group size (its launches')
+  bool fp64 = false;                   // the device has double precision
   bool cpu = false;                    // a CPU: the refinement keeps each query's function in
                                        // its state rather than making it again for each box
   bool bounded_loops = false;          // the device ends loops early: the front update stops
@@ -86,14 +91,29 @@ struct GraphDevice {
 // What the graph takes from the device of `context`.
 GraphDevice graph_device(const runtime::Context& context);
 
-// Adds the elementary tests of every candidate stream to a graph and returns the
-// contact streams they emit, with their kinds. The cubic solver is one pass. The
-// conservative one is a screen (the whole-domain bounds, then the filter), then
-// breadth-first refinement across the device: a work list of (query, box) items whose
-// rounds launch the device's refine_items work-items. `sized` gives a variable stream's first
-// capacity from a guess. With mark_limits, a contact that only a solver limit reported carries
-// its time negated (for reports that count limits).
-std::vector<std::pair<runtime::StreamId, ContactKind>> add_elementary_tests(
+// Whether the conservative solver in single precision sends the contacts its float
+// enclosures cannot prove (an exact zero, no later than twice the time it reports) to
+// a second refinement in double: SolverOptions::escalate, without a minimum separation
+// (a contact then needs no zero, and float's rounding only blurs the separation by
+// ulps), on a device with double.
+bool escalates(const SolverOptions& solver, const GraphDevice& device);
+
+// The streams the elementary tests emit: contacts, with their kinds, and the queries
+// escalated to double (unset where the solver does not escalate).
+struct TestStreams {
+  std::vector<std::pair<runtime::StreamId, ContactKind>> contacts;
+  runtime::StreamId escalated;
+};
+
+// Adds the elementary tests of every candidate stream to a graph. The cubic solver is
+// one pass. The conservative one is a screen (the whole-domain bounds, then the
+// filter), then breadth-first refinement across the device: a work list of (query, box)
+// items whose rounds launch the device's refine_items work-items; where it escalates,
+// a second refinement in double over the queries the first leaves undecided, on
+// inputs.x0_exact and x1_exact. `sized` gives a variable stream's first capacity from a
+// guess. With mark_limits, a contact that only a solver limit reported carries its time
+// negated (for reports that count limits).
+TestStreams add_elementary_tests(
     runtime::StreamGraph& g, const TestInputs& inputs, const SolverOptions& solver, const GraphDevice& device,
     const std::function<std::size_t(std::size_t)>& sized, bool mark_limits = false);
 

@@ -42,6 +42,12 @@ struct SolverOptions {
   // Cull pairs the deforming non-penetration filter proves separate (never a true
   // contact) before solving. Not applied with a minimum separation.
   bool filter = true;
+  // Conservative solver in single precision without a minimum separation, on a device
+  // with double: a contact whose float enclosure cannot prove an exact zero (one no
+  // later than twice the time it reports) is decided again in double, that query
+  // alone. Without it, near misses closer than float's rounding are contacts, and such
+  // a pair can report time 0.
+  bool escalate = true;
 };
 
 // Throws InputError naming the first option out of range (option_checks.hpp), or the
