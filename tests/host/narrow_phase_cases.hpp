@@ -51,6 +51,22 @@ inline Tally run(DeviceSolver& solver, const Dataset& d)
   return t;
 }
 
+// run() over several sets, summed.
+inline Tally run(DeviceSolver& solver, const std::vector<Dataset>& sets)
+{
+  Tally total;
+  for (const auto& d : sets) {
+    const Tally t = run(solver, d);
+    total.queries += t.queries;
+    total.positives += t.positives;
+    total.false_negatives += t.false_negatives;
+    total.false_positives += t.false_positives;
+    total.filtered += t.filtered;
+    total.late += t.late;
+  }
+  return total;
+}
+
 inline SolverOptions conservative(Precision p)
 {
   SolverOptions o;

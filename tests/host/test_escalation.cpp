@@ -89,23 +89,13 @@ TEST_CASE("hand-made queries: single precision misses nothing and cries wolf no 
 {
   const auto sets = handmade();
   DeviceSolver single(cstreams::test::device(), conservative(Precision::single));
-  Tally s, f;
-  for (const auto& d : sets) {
-    const Tally t = run(single, d);
-    s.false_negatives += t.false_negatives;
-    s.false_positives += t.false_positives;
-    s.late += t.late;
-  }
+  const Tally s = run(single, sets);
   CHECK(s.false_negatives == 0);
   CHECK(s.late == 0);
   if (!has_fp64()) return;
   DeviceSolver in_double(cstreams::test::device(), conservative(Precision::double_));
   DeviceSolver in_float(cstreams::test::device(), without_escalation());
-  Tally d;
-  for (const auto& set : sets) {
-    d.false_positives += run(in_double, set).false_positives;
-    f.false_positives += run(in_float, set).false_positives;
-  }
+  const Tally d = run(in_double, sets), f = run(in_float, sets);
   INFO(s.false_positives << " false positives escalated, " << f.false_positives << " in float alone, "
                          << d.false_positives << " in double");
   CHECK(s.false_positives <= d.false_positives);
@@ -116,16 +106,12 @@ TEST_CASE("hand-made queries: single precision misses nothing and cries wolf no 
 // contacts over the five steps.
 TEST_CASE("real steps: single precision reports no contact that does not happen", "[narrow][quick]")
 {
-  DeviceSolver single(cstreams::test::device(), conservative(Precision::single));
-  Tally total;
+  std::vector<Dataset> sets;
   for (const auto& step : real_steps)
-    for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge}) {
-      const Dataset d = real_step_dataset(benchmark_path(std::string("scalable-ccd-sample/") + step.scene), kind);
-      const Tally t = run(single, d);
-      total.false_negatives += t.false_negatives;
-      total.false_positives += t.false_positives;
-      total.late += t.late;
-    }
+    for (auto kind : {ContactKind::vertex_face, ContactKind::edge_edge})
+      sets.push_back(real_step_dataset(benchmark_path(std::string("scalable-ccd-sample/") + step.scene), kind));
+  DeviceSolver single(cstreams::test::device(), conservative(Precision::single));
+  const Tally total = run(single, sets);
   CHECK(total.false_negatives == 0);
   CHECK(total.late == 0);
   if (has_fp64()) CHECK(total.false_positives == 0);
