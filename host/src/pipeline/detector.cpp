@@ -3,6 +3,7 @@
 #include "feature_ids.hpp"
 #include "front_control.hpp"
 #include "position_writes.hpp"
+#include "positions_ahead.hpp"
 #include "scene_upload.hpp"
 
 #include <cstreams/pipeline/ccd_graph.hpp>
@@ -12,13 +13,11 @@
 #include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/runtime/context.hpp>
 #include <cstreams/runtime/error.hpp>
-#include <cstreams/runtime/host_staging.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <future>
 #include <map>
 #include <optional>
 
@@ -111,8 +110,8 @@ struct Detector::State {
                                                      runtime::SchedulerOptions{options.registration, options.profile});
     start_exact = end_exact = upload_scene(*scheduler, g, layout, scene, bounds_margin(options));
     scheduler->on_counter_read([this] {
-      start_uploads_ahead();
-      queue_uploads_ahead(false);
+      ahead.start_rounding();
+      ahead.queue_uploads(*scheduler, false);
     });
     if (!has(streams.front)) return;
     front.install(*scheduler, streams, seeds);
@@ -131,44 +130,12 @@ struct Detector::State {
   PositionWrites given{context};  // set_positions() and set_step()'s
   CcdStreams streams;
   std::unique_ptr<runtime::Scheduler> scheduler;
+  PositionsAhead ahead{context, layout, scene, streams};  // upload_ahead()'s
   ContactSpan contacts;  // in the readback's host memory
   std::vector<ClosePair> close;  // a proximity query's
   // Per object, whether its positions at the step's start and end are floats: where all
   // are, the step's float kernels take them as the exact input (CcdStreams::exact_floats).
   std::vector<bool> start_exact, end_exact;
-  // Positions uploaded ahead (upload_ahead): the callers' positions, rounded into pinned
-  // copies by a task of their own as the next step starts and uploaded from there on
-  // the context's second queue once it is done; the step's uploads (once queued) and
-  // the last step's (which may still read the copies); and when the buffers they go
-  // to are no longer read.
-  struct Ahead {
-    // The step's ends, or its starts: where they go and the pinned copies they go from.
-    struct Side {
-      runtime::StreamId single, exact;
-      runtime::HostStaging single_copy, exact_copy;
-      std::vector<const std::vector<Vec3>*> given;  // per object; null: none
-      bool any() const
-      {
-        return std::any_of(given.begin(), given.end(), [](const auto* x) { return x != nullptr; });
-      }
-    };
-    Side ends, starts;
-    // Adjacent vertices of one side given ahead.
-    struct Run {
-      const Side* side;
-      std::size_t first, count;
-    };
-    struct Uploads {
-      std::vector<Run> runs;
-      // Per object given positions: whether they are floats.
-      std::vector<bool> end_floats, start_floats;
-      std::vector<runtime::Handle<cl_event>> events;  // once queued
-    };
-    std::future<Uploads> uploading;
-    std::optional<Uploads> rounded;  // the task's, once its uploads are queued
-    std::vector<runtime::Handle<cl_event>> taken;
-    runtime::Handle<cl_event> free;
-  } ahead;
   bool have_contacts = false;
   // An earliest-only step's times, as float bits per object: they come back with the
   // step's last counter read (Scheduler::read_after_run).
@@ -215,156 +182,24 @@ struct Detector::State {
     end_exact[o] = r1.exact;
   }
 
-  // The first upload ahead to a side gives its buffers the vertices: a static object's
-  // never change, and those of moving objects given none are copied in after each step.
-  void prepare_ahead(Ahead::Side& side, runtime::StreamId single, runtime::StreamId exact)
-  {
-    runtime::Scheduler& q = *scheduler;
-    const std::size_t n = q.count(streams.x1);
-    if (q.count(single) == n) return;
-    side.single = single;
-    side.exact = exact;
-    q.resize(single, n);
-    q.copy(streams.x1, 0, single, 0, n);
-    runtime::ensure_capacity(context, side.single_copy, n * 3 * sizeof(float), "positions uploaded ahead");
-    if (has(exact)) {
-      q.resize(exact, n);
-      q.copy(streams.x1_double, 0, exact, 0, n);
-      runtime::ensure_capacity(context, side.exact_copy, n * sizeof(Vec3), "positions uploaded ahead");
-    }
-    side.given.assign(scene.objects.size(), nullptr);
-    ahead.free = context.marker();
-  }
-
   void upload_ahead(std::uint32_t o, const std::vector<Vec3>* start, const std::vector<Vec3>& end)
   {
-    prepare_ahead(ahead.ends, streams.x_next, streams.x_next_double);
-    if (start) prepare_ahead(ahead.starts, streams.x0_next, streams.x0_next_double);
-    ahead.ends.given[o] = &end;
-    if (!ahead.starts.given.empty()) ahead.starts.given[o] = start;
+    ahead.give(*scheduler, o, start, end);
   }
 
-  // Rounds the positions given to one side into its pinned copies, where the vertices
-  // go, so that runs of adjacent vertices there go up in one write each; returns per
-  // object whether they were floats, and adds the side's runs to `runs`.
-  std::vector<bool> round_side(const Ahead::Side& side, std::vector<Ahead::Run>& runs) const
-  {
-    std::vector<bool> floats(side.given.size(), false);
-    if (!side.any()) return floats;
-    std::vector<Ahead::Run> own;  // joined within the side alone
-    for (const ObjectSlot& slot : layout.slots) {
-      const std::vector<Vec3>* x = side.given[slot.object];
-      if (!x) continue;
-      const std::size_t first = slot.first_vertex;
-      floats[slot.object] = round_to_float(*x, static_cast<float*>(side.single_copy.data()) + 3 * first,
-                                           has(side.exact) ? static_cast<Vec3*>(side.exact_copy.data()) + first
-                                                           : nullptr)
-                                .exact;
-      append_run(own, Ahead::Run{&side, first, x->size()});
-    }
-    runs.insert(runs.end(), own.begin(), own.end());
-    return floats;
-  }
-
-  // At the step's first counter read, or as it ends where none came: a task rounds the
-  // positions given ahead into the pinned copies while the step runs, so that the
-  // host's copying (27 MB of 1.5M triangles in double) is off the step's path. Not
-  // before the step's first launch, which its thread's start held back (an H200's
-  // cloth-ball step: 12-20 us), while at the read the device is busy. It makes no
-  // OpenCL call: one from a second thread waited for the step's blocking reads and
-  // slowed the launches after them (cloth-ball, 0.12 ms).
-  void start_uploads_ahead()
-  {
-    if (!ahead.ends.any() || ahead.uploading.valid() || ahead.rounded) return;
-    // The copies are written again once the last step's uploads (long done) are.
-    context.block_until(ahead.taken);
-    ahead.taken.clear();
-    ahead.uploading = std::async(std::launch::async, [this] {
-      Ahead::Uploads uploads;
-      uploads.end_floats = round_side(ahead.ends, uploads.runs);
-      uploads.start_floats = round_side(ahead.starts, uploads.runs);
-      return uploads;
-    });
-  }
-
-  // Queues the uploads of the positions rounded ahead on the context's second queue:
-  // at a counter read of the step where the task is done by then (the device is busy,
-  // and the upload overlaps the rest of the step), else as the step ends (`wait`).
-  void queue_uploads_ahead(bool wait)
-  {
-    if (!ahead.uploading.valid() || ahead.rounded) return;
-    if (!wait && ahead.uploading.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
-    ahead.rounded = ahead.uploading.get();
-    const std::size_t vertex = 3 * sizeof(float);
-    for (const Ahead::Run& r : ahead.rounded->runs) {
-      const Ahead::Side& side = *r.side;
-      ahead.rounded->events.push_back(
-          context.write_ahead(scheduler->buffer(side.single), static_cast<float*>(side.single_copy.data()) + 3 * r.first,
-                              r.count * vertex, r.first * vertex, ahead.free));
-      if (has(side.exact))
-        ahead.rounded->events.push_back(context.write_ahead(
-            scheduler->buffer(side.exact), static_cast<Vec3*>(side.exact_copy.data()) + r.first,
-            r.count * sizeof(Vec3), r.first * sizeof(Vec3), ahead.free));
-    }
-  }
-
-  // Where a side's buffers lack objects given none ahead, they take them from this
-  // step's end: so they stay where the step left them.
-  void fill_in_ahead(const Ahead::Side& side)
-  {
-    runtime::Scheduler& q = *scheduler;
-    for (const ObjectSlot& slot : layout.slots) {
-      if (!slot.moving || side.given[slot.object]) continue;
-      const std::size_t count = scene.objects[slot.object].positions.size();
-      q.copy(streams.x1, slot.first_vertex, side.single, slot.first_vertex, count);
-      if (has(side.exact)) q.copy(streams.x1_double, slot.first_vertex, side.exact, slot.first_vertex, count);
-    }
-  }
-
-  // Two position streams exchange buffers, with their float and exact twins.
-  void swap_positions(runtime::StreamId a, runtime::StreamId a_exact, runtime::StreamId b, runtime::StreamId b_exact)
-  {
-    scheduler->swap(a, b);
-    if (has(a_exact)) scheduler->swap(a_exact, b_exact);
-  }
-
-  // After a step, the next one starts where it ended. Without uploads ahead the end is
-  // copied into the starts. With them, buffers change places instead, and no copy
-  // stands between the step and its return: the end becomes the start, the positions
-  // uploaded ahead the next ends (or both ends, given with their starts), and the old
-  // start takes the next uploads once the step no longer reads it.
+  // After a step, the next one starts where it ended: without positions given ahead
+  // the end is copied into the starts; with them, buffers change places.
   void end_step()
   {
     runtime::Scheduler& q = *scheduler;
-    start_uploads_ahead();  // where no counter read did
-    if (!ahead.uploading.valid() && !ahead.rounded) {
-      q.copy(streams.x1, 0, streams.x0, 0, layout.moving_vertices);
-      if (has(streams.x1_double)) q.copy(streams.x1_double, 0, streams.x0_double, 0, layout.moving_vertices);
-      start_exact = end_exact;
+    ahead.start_rounding();  // where no counter read did
+    if (ahead.given()) {
+      ahead.end_step(q, start_exact, end_exact);
       return;
     }
-    queue_uploads_ahead(true);
-    Ahead::Uploads uploads = std::move(*ahead.rounded);
-    ahead.rounded.reset();
-    context.wait_for(uploads.events);
-    fill_in_ahead(ahead.ends);
-    if (ahead.starts.any()) {
-      fill_in_ahead(ahead.starts);
-      for (std::uint32_t o = 0; o < ahead.starts.given.size(); ++o)
-        start_exact[o] = ahead.starts.given[o] ? bool(uploads.start_floats[o]) : end_exact[o];
-      swap_positions(streams.x0, streams.x0_double, streams.x0_next, streams.x0_next_double);
-    } else {
-      start_exact = end_exact;
-      swap_positions(streams.x0, streams.x0_double, streams.x1, streams.x1_double);
-    }
-    swap_positions(streams.x1, streams.x1_double, streams.x_next, streams.x_next_double);
-    for (std::uint32_t o = 0; o < ahead.ends.given.size(); ++o)
-      if (ahead.ends.given[o]) end_exact[o] = uploads.end_floats[o];
-    // The next uploads go to buffers the step read, once nothing reads them.
-    ahead.free = context.marker();
-    ahead.taken = std::move(uploads.events);
-    std::fill(ahead.ends.given.begin(), ahead.ends.given.end(), nullptr);
-    std::fill(ahead.starts.given.begin(), ahead.starts.given.end(), nullptr);
+    q.copy(streams.x1, 0, streams.x0, 0, layout.moving_vertices);
+    if (has(streams.x1_double)) q.copy(streams.x1_double, 0, streams.x0_double, 0, layout.moving_vertices);
+    start_exact = end_exact;
   }
 
   // Runs device work; a failure other than bad input marks the detector unusable.
