@@ -491,7 +491,7 @@ __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state,
  * is at least half the exact one) and no limit cut the search short. */
 inline int cs_contact_stands(const cs_refine_state* s, const uint status, const real t)
 {
-  return status == CS_COLLIDES && t >= (real)0.5 * (real)as_float(s->proven_end);
+  return status == CS_COLLIDES && s->proven_end != CS_NO_TIME && t >= (real)0.5 * (real)as_float(s->proven_end);
 }
 #else
 #define CS_ESCALATED_PARAMS
