@@ -113,9 +113,9 @@ typedef struct {
 } cs_item;
 
 /* 2 keys + 32 bytes, at most 2 reals + 32, 4 more with CS_ESCALATE, and with
- * CS_KEEP_FUNCTION 37 reals more (host: add_refinement). The seed looks up the query's vertices once: a round's
- * visit of a box is a chain of dependent reads, one link shorter without the face's or
- * the edges' indices.
+ * CS_KEEP_FUNCTION 37 reals more (host: add_refine_pass). The seed looks up the
+ * query's vertices once: a round's visit of a box is a chain of dependent reads, one
+ * link shorter without the face's or the edges' indices.
  * CS_KEEP_FUNCTION (set where the device is a CPU): the seed also makes the query's
  * function and scale once, and rounds read them instead of making them again from the
  * points for every box: pocl's cloth-ball refinement 1,155 -> 879 ms. Not on a GPU,

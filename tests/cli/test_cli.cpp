@@ -376,3 +376,36 @@ TEST_CASE("the command-line fuzz corpus parses or is refused", "[cli][fuzz][quic
   }
   CHECK(files >= 8);
 }
+
+// Single precision decides in double the contacts float cannot prove, where the device
+// has double: rod-twist's step, whose float alone answers 0, comes within [0.5, 1] of
+// its exact earliest time; `accuracy` gives that time beside the exact one, and
+// `--no-escalation` reaches both commands.
+TEST_CASE("run and accuracy report single precision's escalation and the earliest time against the exact one",
+          "[cli][quick]")
+{
+  const fs::path dir = fresh_dir("cstreams-cli-escalation");
+  const std::string step = cstreams::test::benchmark_path("scalable-ccd-sample/rod-twist");
+  execute({"accuracy", "--queries", step, "--solver", "conservative", "--precision", "single", "--repeat", "1",
+           "--json", (dir / "accuracy.json").string()});
+  const auto accuracy = nlohmann::json::parse(std::ifstream(dir / "accuracy.json"));
+  double exact = 1;
+  for (const auto& r : accuracy["results"]) {
+    REQUIRE_FALSE(r["exact_earliest"].is_null());
+    CHECK(r["earliest"].get<double>() <= r["exact_earliest"].get<double>());
+    exact = std::min(exact, r["exact_earliest"].get<double>());
+  }
+  REQUIRE(exact > 0);
+  const std::string a = step + "/frames/3036.ply", b = step + "/frames/3037.ply";
+  execute({"run", a, b, "--json", (dir / "run.json").string()});
+  execute({"run", a, b, "--no-escalation", "--json", (dir / "float.json").string()});
+  const auto run = nlohmann::json::parse(std::ifstream(dir / "run.json"));
+  const auto in_float = nlohmann::json::parse(std::ifstream(dir / "float.json"));
+  CHECK(in_float["steps"][0]["escalated"] == 0);
+  CHECK(in_float["earliest_toi"].get<double>() <= exact);
+  const cstreams::runtime::Context context(cstreams::filter_from_environment());
+  if (!context.device().fp64) return;
+  CHECK(run["steps"][0]["escalated"].get<int>() > 0);
+  CHECK(run["earliest_toi"].get<double>() <= exact);
+  CHECK(run["earliest_toi"].get<double>() >= 0.5 * exact);
+}
