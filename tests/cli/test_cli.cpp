@@ -401,10 +401,12 @@ TEST_CASE("run and accuracy report single precision's escalation and the earlies
   execute({"run", a, b, "--no-escalation", "--json", (dir / "float.json").string()});
   const auto run = nlohmann::json::parse(std::ifstream(dir / "run.json"));
   const auto in_float = nlohmann::json::parse(std::ifstream(dir / "float.json"));
+  CHECK(in_float["escalation"] == false);
   CHECK(in_float["steps"][0]["escalated"] == 0);
   CHECK(in_float["earliest_toi"].get<double>() <= exact);
   const cstreams::runtime::Context context(cstreams::filter_from_environment());
   if (!context.device().fp64) return;
+  CHECK(run["escalation"] == true);
   CHECK(run["steps"][0]["escalated"].get<int>() > 0);
   CHECK(run["earliest_toi"].get<double>() <= exact);
   CHECK(run["earliest_toi"].get<double>() >= 0.5 * exact);

@@ -2,6 +2,7 @@
 
 #include "commands.hpp"
 
+#include <cstreams/pipeline/ccd_graph.hpp>
 #include <cstreams/pipeline/option_checks.hpp>
 #include <cstreams/scenes/generators.hpp>
 
@@ -248,6 +249,7 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   Measurement m;
   m.device = context.device().name + (context.device().profile.empty() ? "" : " as " + context.device().profile);
   m.platform = context.device().platform_name;
+  m.escalates = escalates(detector_options(o).solver, graph_device(context));
   if (o.memory_budget > 0) context.set_memory_limit(std::size_t(o.memory_budget * (1 << 20)));
   Detector detector(context, describe(scene, first), detector_options(o));
   const bool terminal = ::isatty(STDERR_FILENO);

@@ -87,6 +87,7 @@ std::unique_ptr<SceneSource> scene_source(const MeasureOptions& o);
 // One device's run over steps [first, last): per step JSON, per pass medians, contacts.
 struct Measurement {
   std::string device, platform;
+  bool escalates = false;  // single precision decides in double what float cannot prove (escalates())
   nlohmann::json steps = nlohmann::json::array();
   std::map<std::string, std::vector<double>> pass_ms;
   std::vector<std::string> pass_order;

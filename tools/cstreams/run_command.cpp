@@ -31,8 +31,8 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
 {
   std::printf("scene     %s: %zu objects, %zu faces\n", scene.name.c_str(), scene.objects.size(), scene.face_count());
   std::printf("device    %s (%s)\n", report.device.c_str(), report.platform.c_str());
-  std::printf("solver    %s, %s precision, tolerance %g; front %s\n", o.solver.c_str(), o.precision.c_str(), o.tolerance,
-              o.front.c_str());
+  std::printf("solver    %s, %s precision%s, tolerance %g; front %s\n", o.solver.c_str(), o.precision.c_str(),
+              report.escalates ? " (what float cannot prove, in double)" : "", o.tolerance, o.front.c_str());
   std::printf("steps     %zu (frames %zu to %zu)\n", last - first, first, last);
   if (o.earliest_only)
     std::printf("contacts  %zu settled on the device (--earliest-only reads none back, and leaves pairs that cannot "
@@ -123,6 +123,7 @@ void run(const RunOptions& o)
                      {"platform", report.platform},
                      {"solver", o.solver},
                      {"precision", o.precision},
+                     {"escalation", report.escalates},
                      {"tolerance", o.tolerance},
                      {"front", o.front},
                      {"front_budget_mb", o.front_budget},
