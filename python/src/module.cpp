@@ -17,35 +17,15 @@ namespace {
 // other failure a RuntimeError (cstreams.Error), each kind its own subclass.
 void bind_errors(py::module_& m)
 {
-  static py::exception<runtime::Error> error(m, "Error", PyExc_RuntimeError);
-  static py::exception<runtime::InputError> input_error(m, "InputError", PyExc_ValueError);
-  static py::exception<runtime::ClError> cl_error(m, "ClError", error.ptr());
-  static py::exception<runtime::BuildError> build_error(m, "BuildError", error.ptr());
-  static py::exception<runtime::DeviceNotFound> not_found(m, "DeviceNotFound", error.ptr());
-  static py::exception<runtime::DeviceMemoryExhausted> exhausted(m, "DeviceMemoryExhausted", error.ptr());
-  static py::exception<runtime::StreamLimitExceeded> limit(m, "StreamLimitExceeded", error.ptr());
-  static py::exception<runtime::RunStopped> stopped(m, "RunStopped", error.ptr());
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const runtime::InputError& e) {
-      input_error(e.what());
-    } catch (const runtime::ClError& e) {
-      cl_error(e.what());
-    } catch (const runtime::BuildError& e) {
-      build_error(e.what());
-    } catch (const runtime::DeviceNotFound& e) {
-      not_found(e.what());
-    } catch (const runtime::DeviceMemoryExhausted& e) {
-      exhausted(e.what());
-    } catch (const runtime::StreamLimitExceeded& e) {
-      limit(e.what());
-    } catch (const runtime::RunStopped& e) {
-      stopped(e.what());
-    } catch (const runtime::Error& e) {
-      error(e.what());
-    }
-  });
+  // pybind11 tries translators last registered first: each subclass after Error.
+  const auto& error = py::register_exception<runtime::Error>(m, "Error", PyExc_RuntimeError);
+  py::register_exception<runtime::InputError>(m, "InputError", PyExc_ValueError);
+  py::register_exception<runtime::ClError>(m, "ClError", error.ptr());
+  py::register_exception<runtime::BuildError>(m, "BuildError", error.ptr());
+  py::register_exception<runtime::DeviceNotFound>(m, "DeviceNotFound", error.ptr());
+  py::register_exception<runtime::DeviceMemoryExhausted>(m, "DeviceMemoryExhausted", error.ptr());
+  py::register_exception<runtime::StreamLimitExceeded>(m, "StreamLimitExceeded", error.ptr());
+  py::register_exception<runtime::RunStopped>(m, "RunStopped", error.ptr());
 }
 
 py::dict device_dict(const DeviceInfo& d)
