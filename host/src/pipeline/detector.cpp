@@ -86,8 +86,6 @@ namespace {
 
 using Pair = std::array<std::uint32_t, 2>;
 
-bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
-
 }  // namespace
 
 // What a detector holds between steps: the scene, its layout on the device, the

@@ -10,8 +10,6 @@ namespace cstreams {
 
 namespace {
 
-bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
-
 // Two position streams exchange buffers, with their float and exact twins.
 void swap_positions(runtime::Scheduler& scheduler, runtime::StreamId a, runtime::StreamId a_exact, runtime::StreamId b,
                     runtime::StreamId b_exact)

@@ -11,8 +11,6 @@ namespace cstreams {
 
 namespace {
 
-bool has(runtime::StreamId s) { return s != runtime::StreamId{}; }
-
 // The nodes as the kernels read them, in half the bytes (bounds.h): the first child or
 // -1 - face, then parent + 1 above the depth's bits.
 std::vector<std::array<std::int32_t, 2>> device_nodes(const SceneLayout& layout)

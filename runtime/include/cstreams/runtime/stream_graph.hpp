@@ -16,6 +16,9 @@ struct StreamId {
   friend bool operator==(StreamId a, StreamId b) { return a.index == b.index; }
   friend bool operator!=(StreamId a, StreamId b) { return a.index != b.index; }
 };
+// Whether a graph has the stream: ids a graph leaves unset (a stream the scene does not
+// need) are default-made.
+inline bool has(StreamId s) { return s != StreamId{}; }
 struct ParamId {
   std::uint32_t index = 0xffffffffu;
 };
