@@ -249,9 +249,10 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   Measurement m;
   m.device = context.device().name + (context.device().profile.empty() ? "" : " as " + context.device().profile);
   m.platform = context.device().platform_name;
-  m.escalates = escalates(detector_options(o).solver, graph_device(context));
   if (o.memory_budget > 0) context.set_memory_limit(std::size_t(o.memory_budget * (1 << 20)));
-  Detector detector(context, describe(scene, first), detector_options(o));
+  const DetectorOptions options = detector_options(o);
+  m.escalates = escalates(options.solver, graph_device(context));
+  Detector detector(context, describe(scene, first), options);
   const bool terminal = ::isatty(STDERR_FILENO);
   // A device without a kernel timer, or a run that records none, reports times as
   // unknown (NaN; null in JSON).
