@@ -28,7 +28,7 @@
  * is final only where a hit proved an exact zero (proof.h) no later than twice the
  * query's answer, and is not a limit's; every other query the refinement would report
  * goes to `escalated` instead, and the same search in double decides it (built with
- * CS_CONTACT_FLOAT, ccd_graph.cpp). Its float answer stands for nothing then, so
+ * CS_CONTACT_FLOAT, elementary_tests.cpp). Its float answer stands for nothing then, so
  * in earliest-only mode only a proven contact gives up other queries, by the end of
  * its proof's box, which bounds the query's answer in either precision. */
 #include "conservative.h"
@@ -36,13 +36,11 @@
 #include "cubic.h"
 #include "pairs.h"
 #include "proof.h"
+#include "refine_earliest.h"
+#include "refine_state.h"
 #include "runtime/registration.h"
 #include "runtime/worklist.h"
 
-#define CS_FLAG_SLACK 1u
-#define CS_FLAG_LIMIT 2u
-#define CS_FLAG_VERTEX_FACE 4u
-#define CS_FLAG_NOT_EARLIEST 8u /* given up: it cannot hold an object's earliest time */
 /* Budgets beyond the caller's work limit, after which a query answers as out of work:
  * rounds deeper than any box a precision can still halve in all three parameters for
  * a useful query, and boxes a query holds at once, which bounds the list's memory when
@@ -65,144 +63,11 @@
 #define CS_CUT_FINER_FROM 8u
 #define CS_FINER_HALVINGS 3
 
-/* A time as the bits of a float no later (cs_float_key_down) or no earlier than it. */
-inline uint cs_float_key_down(const real t) { return as_uint(cs_float_down(t)); }
-
-inline uint cs_float_key_up(const real t)
-{
-  float f = (float)t;
-  if ((real)f < t) f = nextafter(f, 2.0f);
-  return as_uint(f);
-}
-
-/* Each query's earliest contact so far is a key updated by atomic minimum. Times are
- * never negative, so their bits order as they do. In double precision the key is the
- * double where the device has 64-bit atomics; elsewhere (an HD 5870) it is the time
- * rounded down to float. Pruning with that rounded-down time only drops boxes that
- * start after it, so the answer is still no later than any contact: it is the earliest
- * contact the 64-bit key would give, rounded down to float.
- * cs_key_lower(p, seen, k) lowers *p to k, given a value `seen` that *p held before:
- * keys only fall, so where k is no lower than that, there is nothing to do. */
-#if CS_REAL_DOUBLE && CS_HAS_INT64_ATOMICS
-#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-typedef ulong cs_key;
-inline cs_key cs_key_of(const real t) { return as_ulong(t); }
-inline real cs_time_of(const cs_key k) { return as_double(k); }
-inline void cs_key_lower(volatile __global cs_key* p, cs_key seen, const cs_key k)
-{
-  while (k < seen) {
-    const cs_key old = atom_cmpxchg(p, seen, k);
-    if (old == seen) break;
-    seen = old;
-  }
-}
-#else
-typedef uint cs_key;
-inline cs_key cs_key_of(const real t) { return cs_float_key_down(t); }
-inline real cs_time_of(const cs_key k) { return (real)as_float(k); }
-inline void cs_key_lower(volatile __global cs_key* p, const cs_key seen, const cs_key k)
-{
-  if (k < seen) atomic_min(p, k);
-}
-#endif
-
-/* 8 + 6 reals bytes (host: add_elementary_tests). */
-typedef struct {
-  uint query, work;
-  cs_box box;
-} cs_item;
-
-/* 2 keys + 32 bytes, at most 2 reals + 32, 4 more with CS_ESCALATE, and with
- * CS_KEEP_FUNCTION 37 reals more (host: add_refine_pass). The seed looks up the
- * query's vertices once: a round's visit of a box is a chain of dependent reads, one
- * link shorter without the face's or the edges' indices.
- * CS_KEEP_FUNCTION (set where the device is a CPU): the seed also makes the query's
- * function and scale once, and rounds read them instead of making them again from the
- * points for every box: pocl's cloth-ball refinement 1,155 -> 879 ms. Not on a GPU,
- * where reading 148 or 296 bytes a box costs more than making them (H100: cloth-ball's
- * refinement 1.58 -> 1.89 ms, n-body's 0.85 -> 1.86) and the state would hold 75 MB
- * more on cloth-ball. */
-typedef struct {
-  cs_key best[2];
-  uint work[3];
-  uint flags;
-  uint vertices[4];
-#if CS_ESCALATE
-  uint proven_end; /* the earliest end of a box a hit proved a zero in, as a float rounded up */
-#endif
-#if CS_KEEP_FUNCTION
-  cs_trilinear f;
-  real scale;
-#endif
-} cs_refine_state;
-
-#define CS_NO_TIME 0x40000000u /* 2.0f: later than any time of a step */
-
 /* queries: (a, b, vertex_face, 0) as the screen emits them (narrow_phase_pairs.cl). */
 #define CS_REFINE_PARAMS                                                                                         \
   __global const uint4 *queries, const uint n, __global const real *x0, __global const real *x1,               \
       __global const uint *faces, __global const uint *edges, const uint exact_input, const real tolerance,     \
       const real separation, const uint max_iterations, const uint use_filter CS_EARLIEST_PARAMS
-
-/* Built with CS_EARLIEST_ACROSS (a scene of objects): whether this step reports only
- * each object's earliest time, every vertex's object, and two words per object: the
- * earliest contact any query has found so far, as the bits of a float rounded up (a
- * contact's time, not yet an answer: the answer of the query that found it is no
- * later), and the first round that found a contact at time 0 (0xffffffff: none). */
-#if CS_EARLIEST_ACROSS
-#define CS_EARLIEST_PARAMS , const uint earliest_only, __global const uint *vertex_object, __global uint *found
-#else
-#define CS_EARLIEST_PARAMS
-#endif
-
-#if CS_EARLIEST_ACROSS
-/* Built so, the state of the n queries is followed by three words a query, held only
- * while earliest_only is set (Worklist::extra_state_bytes): first[r % 3] is the earliest
- * start of round r's boxes as a float rounded down, gathered by round r - 1 as work[]
- * is. Apart from the rest, so that steps that need no earliest time read the state as
- * they would without it, and hold no memory for it. */
-inline __global uint* cs_first_starts(__global cs_refine_state* state, const uint n, const uint query)
-{
-  return (__global uint*)(state + n) + 3 * query;
-}
-
-inline uint2 cs_query_objects(const cs_refine_state* s, __global const uint* vertex_object)
-{
-  return (uint2)(vertex_object[s->vertices[0]], vertex_object[s->vertices[s->flags & CS_FLAG_VERTEX_FACE ? 1 : 2]]);
-}
-
-/* Whether the query's answer can no longer be an object's earliest time that another
- * query does not give. Its answer is no earlier than `bound`: its earliest contact so
- * far or its earliest box left, moved back by the tolerance (cs_final_time).
- * - Where the bound is later than a contact found for the object, so is the answer:
- *   the query that found the contact answers no later than it, and goes on (its own
- *   bound is no later than its contact, so it never gives itself up).
- * - Where a round before this one found a contact at 0 for the object, its query
- *   answers 0, and answers can be no earlier. That query goes on: from then on its
- *   earliest contact so far (`before`) is 0, and such a query never gives up here. */
-inline int cs_covered(__global const uint* found, const uint object, const real bound, const real before,
-                      const uint round)
-{
-  return bound > (real)as_float(found[2 * object]) || (before > 0 && found[2 * object + 1] < round);
-}
-
-inline int cs_not_earliest(const cs_refine_state* seen, __global const uint* first, const uint round,
-                           const real before, const real tolerance, __global const uint* vertex_object,
-                           __global const uint* found)
-{
-  if (seen->flags & CS_FLAG_NOT_EARLIEST) return 1;
-  const real bound = cs_final_time(fmin(before, (real)as_float(first[(round + 2) % 3])), 1, tolerance);
-  if (!(bound > 0) && !(before > 0)) return 0;
-  const uint2 o = cs_query_objects(seen, vertex_object);
-  return cs_covered(found, o.x, bound, before, round) && cs_covered(found, o.y, bound, before, round);
-}
-
-inline void cs_found_at(volatile __global uint* found, const uint object, const uint key, const uint round)
-{
-  if (key < found[2 * object]) atomic_min(&found[2 * object], key);
-  if (key == 0 && round < found[2 * object + 1]) atomic_min(&found[2 * object + 1], round);
-}
-#endif
 
 /* A small box around the first touch that the cubic solver finds: along each parameter
  * F moves by half the tolerance from its centre, so a round or two of halving finds a
@@ -254,23 +119,6 @@ inline int cs_first_times(const cs_query* query, const uint vertex_face, const r
   cs_coplanarity_cubic(query, (int)vertex_face, c);
   return use_filter && cs_cubic_keeps_sign(c) ? 0 : cs_coplanar_times(c, lo, hi);
 }
-
-#if CS_EARLIEST_ACROSS
-/* Before any round, and again when the list overflowed and the search starts over:
- * contacts found by a cut-short search must not give up queries. Every store is the
- * same value; the test keeps most of them off the few objects' words. `first_start`:
- * round 0's first box's start. */
-inline void cs_seed_earliest(__global uint* first, const uint first_start, const uint2 o, __global uint* found)
-{
-  first[0] = first[1] = CS_NO_TIME;
-  first[2] = first_start;
-  for (int k = 0; k < 2; ++k) {
-    const uint object = k ? o.y : o.x;
-    if (found[2 * object] != CS_NO_TIME) found[2 * object] = CS_NO_TIME;
-    if (found[2 * object + 1] != 0xffffffffu) found[2 * object + 1] = 0xffffffffu;
-  }
-}
-#endif
 
 __kernel void cs_refine_seed(CS_REFINE_PARAMS, __global cs_refine_state* state, __global cs_item* list,
                              __global uint* counts, const uint capacity)
@@ -395,35 +243,6 @@ inline void cs_round_store(__local uint* group, __global uint* counts, const uin
     if (boxes > 1 && cs_worklist_fits(counts, capacity, at + 1)) out[at + 1] = hi;
   }
 }
-
-#if CS_EARLIEST_ACROSS
-/* In earliest-only mode, after a visit: the next round's first start reset, the first
- * start of the boxes it leaves (lo, or the one cut, starts no later), and a contact's
- * time for its objects (with CS_ESCALATE, a proven one's end of proof). */
-inline void cs_round_earliest(__global uint* first, const uint round, const int visit, const real lo_start,
-                              const real t, const real proven_end, const cs_refine_state* seen,
-                              __global const uint* vertex_object, volatile __global uint* found)
-{
-  first[(round + 1) % 3] = CS_NO_TIME;
-  if (visit >= CS_BOX_SPLIT) {
-    const uint start = cs_float_key_down(lo_start);
-    if (start < first[round % 3]) atomic_min(&first[round % 3], start);
-  }
-#if CS_ESCALATE
-  const real contact = proven_end;
-  (void)t;
-#else
-  const real contact = t;
-  (void)proven_end;
-#endif
-  if (visit == CS_BOX_HIT && contact <= 1) {
-    const uint2 o = cs_query_objects(seen, vertex_object);
-    const uint key = cs_float_key_up(contact);
-    cs_found_at(found, o.x, key, round);
-    cs_found_at(found, o.y, key, round);
-  }
-}
-#endif
 
 __kernel void cs_refine_round(CS_REFINE_PARAMS, __global cs_refine_state* state, __global const cs_item* in,
                               __global cs_item* out, __global uint* counts, const uint round, const uint capacity)
