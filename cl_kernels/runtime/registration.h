@@ -75,14 +75,20 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
  * overflow slot counts spilled items, past the pool's size too; the total slot, the
  * stream's count, adds up the groups' counts, so that the host learns it with the
  * stage's counters before anything has scanned the counts (the merge of an output
- * packed after that read then finds its offsets itself, compact.cl). The group's segment
+ * packed after that read then finds its offsets itself, compact.cl). A group that
+ * finds the pool full stops asking the overflow slot for places and adds what it spilled
+ * past them at its end: a first step searched from the roots spills millions of items,
+ * and their atomics on one word took a twentieth of its front update (H200, cold step's
+ * front update: cloth-ball 4.89 -> 4.65 ms, n-body 7.20 -> 7.01). The group's segment
  * (start, room, spill pool's start) sits in local memory: read from the plan at each
  * emit, the compiler would load it early and hold it in registers through the kernel. */
 #define CS_EMITTER_BEGIN(P)                                                                   \
-  __local uint P##_group_count, P##_segment[3];                                               \
+  __local uint P##_group_count, P##_segment[3], P##_pool_tries, P##_pool_full;                \
   if (get_local_id(0) == 0) {                                                                 \
     const uint cs_g_ = (uint)get_group_id(0);                                                 \
     P##_group_count = 0;                                                                      \
+    P##_pool_tries = 0;                                                                       \
+    P##_pool_full = 0;                                                                        \
     P##_segment[0] = cs_segment_base(P##_plan, P##_planned, P##_capacity, cs_g_);             \
     P##_segment[1] = cs_segment_base(P##_plan, P##_planned, P##_capacity, cs_g_ + 1u) - P##_segment[0]; \
     P##_segment[2] = cs_segment_base(P##_plan, P##_planned, P##_capacity, (uint)get_num_groups(0)); \
@@ -93,13 +99,16 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
     const uint cs_at_ = atomic_inc(&P##_group_count);                                         \
     if (cs_at_ < P##_segment[1]) {                                                            \
       P##_out[P##_segment[0] + cs_at_] = (value);                                             \
-    } else {                                                                                  \
+    } else if (!P##_pool_full) {                                                              \
       const uint cs_groups_ = (uint)get_num_groups(0);                                        \
       const uint cs_spill_ = atomic_inc(&P##_counters[P##_slot]);                             \
+      atomic_inc(&P##_pool_tries);                                                            \
       if (cs_spill_ < P##_pool) {                                                             \
         P##_out[P##_segment[2] + cs_spill_] = (value);                                        \
         P##_counts[cs_groups_ + 2u * cs_spill_] = (uint)get_group_id(0);                      \
         P##_counts[cs_groups_ + 2u * cs_spill_ + 1u] = cs_at_;                                \
+      } else {                                                                                \
+        P##_pool_full = 1u;                                                                   \
       }                                                                                       \
     }                                                                                         \
   } while (0)
@@ -108,6 +117,9 @@ inline uint cs_segment_base(__global const uint* plan, const uint planned, const
   if (get_local_id(0) == 0) {                                                                 \
     P##_counts[get_group_id(0)] = P##_group_count;                                            \
     if (P##_group_count) atomic_add(&P##_counters[P##_total_slot], P##_group_count);          \
+    const uint cs_spilled_ = P##_group_count - min(P##_group_count, P##_segment[1]);          \
+    if (cs_spilled_ > P##_pool_tries)                                                         \
+      atomic_add(&P##_counters[P##_slot], cs_spilled_ - P##_pool_tries);                      \
   }
 
 #elif CS_REGISTRATION == CS_REG_LOCK_FREE

@@ -252,7 +252,10 @@ Measurement measure(const MeasureOptions& o, const Scene& scene, std::size_t fir
   if (o.memory_budget > 0) context.set_memory_limit(std::size_t(o.memory_budget * (1 << 20)));
   const DetectorOptions options = detector_options(o);
   m.escalates = escalates(options.solver, graph_device(context));
-  Detector detector(context, describe(scene, first), options);
+  const SceneDescription description = describe(scene, first);
+  const auto making = std::chrono::steady_clock::now();
+  Detector detector(context, description, options);
+  m.detector_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - making).count();
   const bool terminal = ::isatty(STDERR_FILENO);
   // A device without a kernel timer, or a run that records none, reports times as
   // unknown (NaN; null in JSON).

@@ -94,6 +94,9 @@ struct Measurement {
   std::vector<double> host_ms, device_ms;
   std::vector<double> step_ms;  // wall time of each step's uploads and detect() together
   std::size_t peak_bytes = 0;  // the device's high-water mark over every step run, warm-ups included
+  // Wall time to make the detector: the scene's layout and trees, its first front, the
+  // programs (where the driver has not cached them) and the scene's uploads.
+  double detector_ms = 0;
   std::vector<Contact> contacts;      // every step's, in step order, each step canonical (none if earliest_only)
   std::size_t contact_count = 0;      // over all steps, as the device counted them (DetectorStats::contacts)
   std::vector<std::size_t> step_ends;  // where each step's contacts end in `contacts`

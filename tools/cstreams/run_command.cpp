@@ -64,6 +64,8 @@ void print_summary(const Scene& scene, const RunOptions& o, std::size_t first, s
   std::printf("uploads   %.3f ms per step with its positions' uploads (%s)\n", median(report.step_ms),
               uploads_ahead(o) ? "made while the step before ran" : "made before it");
   std::printf("memory    %.1f MiB on the device at most (during a step)\n", double(report.peak_bytes) / (1 << 20));
+  std::printf("setup     %.1f ms to make the detector (layout, trees, first front, programs, uploads)\n",
+              report.detector_ms);
 }
 
 // Per step and per pass, for --passes.
@@ -141,6 +143,7 @@ void run(const RunOptions& o)
                                {"device_ms", tail_json(report.device_ms, first)},
                                {"step_ms", tail_json(report.step_ms, first)}}},
                      {"peak_bytes", report.peak_bytes},
+                     {"detector_ms", report.detector_ms},
                      {"steps", report.steps}};
     write_file_atomically(o.json, [&](std::ostream& out) { out << j.dump(1) << "\n"; });
   }

@@ -101,7 +101,7 @@ struct Detector::State {
     // pins its host memory as it is made.
     if (o.detects == Detects::contacts) readback.emplace(device, layout, scene, o.solver.precision);
     else close_readback.emplace(device, layout, ids);
-    const std::vector<NodePair> seeds = expand_front(layout, front.initial_target());
+    const std::vector<NodePair> seeds = front.first_front();
     CcdGraph g = build_ccd_graph(layout, options, seeds.size(), graph_device(device));
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),

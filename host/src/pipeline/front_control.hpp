@@ -22,8 +22,9 @@ public:
   FrontControl(const DetectorOptions& options, const SceneLayout& layout, std::size_t work_items,
                std::size_t work_group, bool bounded_loops);
 
-  // The pairs the first front should hold: enough work for the device, within budget.
-  std::size_t initial_target() const { return target_; }
+  // The first front: enough work for the device, within budget, and an exact front's
+  // finer where boxes overlap at the starting positions.
+  std::vector<NodePair> first_front() const;
   // Gives a new scheduler the first front (seeds searched every step spread over the
   // work-groups that search them: spread_over_groups), its limits and the level cap.
   void install(runtime::Scheduler& scheduler, const CcdStreams& streams, const std::vector<NodePair>& seeds) const;

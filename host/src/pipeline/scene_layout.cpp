@@ -2,8 +2,11 @@
 #include <cstreams/errors.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
+
+#include <tbb/parallel_for.h>
 
 namespace cstreams {
 
@@ -148,12 +151,16 @@ void lay_out_forest(SceneLayout& l)
     s.root = global[s.object][0];
   }
   l.nodes.resize(std::size_t(next));
+  l.node_object.resize(std::size_t(next));
+  l.node_local.resize(std::size_t(next));
   for (const ObjectSlot& s : l.slots) {
     const Bvh& t = l.trees[s.object];
     const auto depth = node_depths(t);
     const auto& g = global[s.object];
     for (std::size_t i = 0; i < t.nodes.size(); ++i) {
       const BvhNode& node = t.nodes[i];
+      l.node_object[std::size_t(g[i])] = s.object;
+      l.node_local[std::size_t(g[i])] = std::uint32_t(i);
       l.nodes[std::size_t(g[i])] = {node.left < 0 ? -1 : g[std::size_t(node.left)],
                                     node.face < 0 ? -1 : node.face + std::int32_t(s.first_face),
                                     node.parent < 0 ? -1 : g[std::size_t(node.parent)], std::int32_t(depth[i])};
@@ -277,6 +284,77 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePa
     if (!expanded) break;
   }
   return front;
+}
+
+namespace {
+
+// The axis-aligned part of the nodes' boxes at the starting positions, in floats rounded
+// outward, in the forest's order, where pairs near each other in a cut read them nearly
+// in turn: read from the trees' 18-DOPs, which lie in each object's order, the tests
+// missed the caches and took cloth-ball's expansion to 2.2 million pairs 0.36 s.
+using StartBox = std::array<float, 6>;
+
+std::vector<StartBox> start_boxes(const SceneLayout& layout)
+{
+  std::vector<StartBox> boxes(layout.nodes.size());
+  for (std::size_t n = 0; n < boxes.size(); ++n) {
+    const Kdop18& k = layout.start_box(std::int32_t(n));
+    for (std::size_t a = 0; a < 3; ++a) {
+      boxes[n][a] = std::nextafter(float(k.lo[a]), -HUGE_VALF);
+      boxes[n][a + 3] = std::nextafter(float(k.hi[a]), HUGE_VALF);
+    }
+  }
+  return boxes;
+}
+
+bool apart(const StartBox& a, const StartBox& b)
+{
+  return a[0] > b[3] || b[0] > a[3] || a[1] > b[4] || b[1] > a[4] || a[2] > b[5] || b[2] > a[5];
+}
+
+// The pairs below p down to `levels` levels, depth first, which is the breadth-first
+// expansion's order; as there, pairs of leaves and pairs apart stay.
+void refine_pair(const SceneLayout& layout, const std::vector<StartBox>& boxes, const NodePair& p, unsigned levels,
+                 std::vector<NodePair>& out)
+{
+  const auto [i, j] = p;
+  const auto &a = layout.nodes[std::size_t(i)], &b = layout.nodes[std::size_t(j)];
+  if (i == j && a[0] < 0) return;  // a leaf against itself pairs nothing
+  if (levels == 0 || (i != j && ((a[0] < 0 && b[0] < 0) || apart(boxes[std::size_t(i)], boxes[std::size_t(j)])))) {
+    out.push_back(p);
+    return;
+  }
+  if (i == j) {
+    for (const NodePair& c : {NodePair{a[0], a[0] + 1}, NodePair{a[0], a[0]}, NodePair{a[0] + 1, a[0] + 1}})
+      refine_pair(layout, boxes, c, levels - 1, out);
+  } else if (a[0] >= 0 && (b[0] < 0 || a[3] <= b[3])) {
+    refine_pair(layout, boxes, {a[0], j}, levels - 1, out);
+    refine_pair(layout, boxes, {a[0] + 1, j}, levels - 1, out);
+  } else {
+    refine_pair(layout, boxes, {i, b[0]}, levels - 1, out);
+    refine_pair(layout, boxes, {i, b[0] + 1}, levels - 1, out);
+  }
+}
+
+}  // namespace
+
+std::vector<NodePair> expand_overlapping(const SceneLayout& layout, const std::vector<NodePair>& front,
+                                         unsigned levels)
+{
+  const std::vector<StartBox> boxes = start_boxes(layout);
+  // Runs of the front refined on the host's threads, then joined in order.
+  constexpr std::size_t run = 1024;
+  std::vector<std::vector<NodePair>> parts((front.size() + run - 1) / run);
+  tbb::parallel_for(std::size_t(0), parts.size(), [&](std::size_t k) {
+    for (std::size_t n = k * run; n < std::min(front.size(), (k + 1) * run); ++n)
+      refine_pair(layout, boxes, front[n], levels, parts[k]);
+  });
+  std::size_t total = 0;
+  for (const auto& part : parts) total += part.size();
+  std::vector<NodePair> refined;
+  refined.reserve(total);
+  for (const auto& part : parts) refined.insert(refined.end(), part.begin(), part.end());
+  return refined;
 }
 
 std::vector<NodePair> spread_over_groups(const std::vector<NodePair>& front, std::size_t group)

@@ -46,6 +46,7 @@ struct SceneLayout {
   Topology topology;                   // all objects, global ids
   std::vector<Bvh> trees;              // per object, local ids
   std::vector<std::array<std::int32_t, 4>> nodes;  // (first child, face, parent, depth), global ids
+  std::vector<std::uint32_t> node_object, node_local;  // per global node: its tree, and its index there
   std::vector<std::uint32_t> levels;   // moving nodes of level d: [levels[d], levels[d + 1])
   std::size_t moving_vertices = 0, moving_faces = 0, moving_edges = 0, moving_nodes = 0;
   std::size_t depth = 0;               // deepest tree's levels
@@ -54,6 +55,11 @@ struct SceneLayout {
   std::vector<std::uint32_t> vertex_object;
 
   std::size_t vertex_count() const { return topology.vertex_count; }
+  // A node's box at the starting positions (the one its tree was built over).
+  const Kdop18& start_box(std::int32_t node) const
+  {
+    return trees[node_object[std::size_t(node)]].boxes[node_local[std::size_t(node)]];
+  }
   bool has_static() const { return moving_vertices < topology.vertex_count; }
 };
 
@@ -73,6 +79,13 @@ std::vector<NodePair> expand_front(const SceneLayout& layout, std::size_t target
 // `most` pairs: the last level is then expanded only in part.
 std::vector<NodePair> expand_front(const SceneLayout& layout, std::vector<NodePair> front, std::size_t target,
                                    std::size_t most);
+// Each pair of the cut `front` replaced by the pairs below it down to `levels` levels,
+// in the same order, except that pairs of distinct nodes whose boxes at the starting
+// positions are apart stay as they are: a finer cut that deepens only where the starting
+// positions' exact front lies, and so holds no more pairs than that front, where an
+// untested expansion of objects far apart would hold mostly pairs far apart.
+std::vector<NodePair> expand_overlapping(const SceneLayout& layout, const std::vector<NodePair>& front,
+                                         unsigned levels);
 // The same pairs with the ones near each other in `front` dealt to different
 // work-groups of `group` pairs: consecutive pairs of an expanded front lie in one region
 // of the trees, where a fold of cloth makes every pair's search long, and a work-group's
