@@ -2,8 +2,8 @@
 # Steps off the warm path (BENCHMARKS.md §2): for each of the five real steps, the warm
 # step's wall (exact front, conservative and cubic), the step searched from fixed seeds
 # (--front none: wall, and the search's device time) and the cold first step of a fresh
-# detector (wall, the median of five processes, and its front update's device time and
-# launches). One line a step. Wall times are --no-profile. Writes every run's JSON and
+# detector (wall, the median of seven processes, with the median time to make the
+# detector, and its front update's device time and launches). One line a step. Wall times are --no-profile. Writes every run's JSON and
 # contacts under OUT (default bench-out), so that two builds' contacts compare with cmp.
 #   [STEPS="cloth-funnel:227:228 ..."] tools/bench_off_warm.sh [CSTREAMS] [OUT]
 set -euo pipefail
@@ -13,6 +13,9 @@ data=scenes/benchmarks/scalable-ccd-sample
 mkdir -p "$out"
 wall() { "$cstreams" run "$@" --no-profile --json "$out/wall.json" >/dev/null
   python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['median_host_ms'])" "$out/wall.json"; }
+# A cold run's wall time and the time to make its detector, as "wall:setup".
+cold() { "$cstreams" run "$@" --no-profile --json "$out/cold.json" >/dev/null
+  python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print(f\"{j['median_host_ms']}:{j['detector_ms']}\")" "$out/cold.json"; }
 steps=${STEPS:-cloth-funnel:227:228 rod-twist:3036:3037 armadillo-rollers:326:327 \
 n-body-simulation:balls16_18:balls16_19 cloth-ball:cloth_ball92:cloth_ball93}
 for step in $steps; do
@@ -22,18 +25,20 @@ for step in $steps; do
   cubic=$(wall "${frames[@]}" --front exact --solver cubic --repeat 41)
   none=$(wall "${frames[@]}" --front none --repeat 21)
   cold=()
-  for _ in 1 2 3 4 5; do cold+=("$(wall "${frames[@]}" --front exact)"); done
+  for _ in 1 2 3 4 5 6 7; do cold+=("$(cold "${frames[@]}" --front exact)"); done
   "$cstreams" run "${frames[@]}" --front none --repeat 11 --json "$out/$scene-none.json" \
     --out "$out/$scene-none.csv" >/dev/null
   "$cstreams" run "${frames[@]}" --front exact --json "$out/$scene-cold.json" --out "$out/$scene-exact.csv" >/dev/null
   python3 - "$out" "$scene" "$warm" "$cubic" "$none" "${cold[@]}" <<'PY'
 import json, statistics, sys
 out, scene, warm, cubic, none = sys.argv[1:6]
-cold = statistics.median(float(c) for c in sys.argv[6:])
+cold = statistics.median(float(c.split(":")[0]) for c in sys.argv[6:])
+setup = statistics.median(float(c.split(":")[1]) for c in sys.argv[6:])
 search = json.load(open(f"{out}/{scene}-none.json"))["steps"][0]["passes"]["search from seeds"]
 update = json.load(open(f"{out}/{scene}-cold.json"))["steps"][0]["passes"]["front update"]
 ms = lambda p: float("nan") if p["ms"] is None else p["ms"]
 print(f"{scene:18s} warm {float(warm):7.3f}  cubic {float(cubic):7.3f}  none {float(none):7.3f} "
-      f"(search {ms(search):7.3f})  cold {cold:7.3f} (front update {ms(update):7.3f}, {update['launches']} launches)")
+      f"(search {ms(search):7.3f})  cold {cold:7.3f} (front update {ms(update):7.3f}, {update['launches']} launches; "
+      f"setup {setup:.1f})")
 PY
 done
