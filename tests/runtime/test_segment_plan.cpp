@@ -91,6 +91,15 @@ TEST_CASE("a launch's counts plan the next, and a plan for another number of gro
   s.segments = 120;
   SegmentPlanner::adopt(s, 1000, 900);
   CHECK(s.spilled == 500);
+  // Nor does a plan forgotten for another number of groups: what spilled from groups
+  // that each held the last total spread evenly sizes the next pool.
+  s = planned(100, 800);
+  SegmentPlanner::forget_stale_plan(s, 200);
+  s.segments = 200;
+  SegmentPlanner::adopt(s, 1200, 400);
+  CHECK(s.spilled == 400);
+  CHECK(s.planned == 200);
+  CHECK(s.fresh == 0);
   // Neither an unplanned launch's spill nor a rerun's says how a step outgrows the last.
   SegmentSizes first = emitter(1.5, 256);
   first.segments = 40;

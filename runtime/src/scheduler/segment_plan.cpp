@@ -79,12 +79,17 @@ void SegmentPlanner::forget_stale_plan(SegmentSizes& s, std::size_t segments)
 // a fifth a step (the 1.5M-triangle sheet) had run its front update twice in most steps
 // while the pool grew fourfold a step. Up to half of what it emitted, so that after a
 // burst (a step where contact surges) the next step's pool holds no more than that step
-// emitted. Not an unplanned execution's (a first step's, searched from the roots:
-// cloth-ball's next steps then peaked 11% above a settled one), nor a rerun's, planned
-// from its own counts.
+// emitted. So too where the plan was forgotten and the groups each held the last total
+// spread evenly (forget_stale_plan): what spilled then is how unevenly the groups
+// emit, which a front that grows by more than an eighth a step keeps doing, and each of
+// the 1.5M-triangle sheet's growing steps had run its front update twice with a pool
+// sized before its growth began. Not an unplanned execution's (a first step's,
+// searched from the roots: cloth-ball's next steps then peaked 11% above a settled
+// one), nor a rerun's, planned from its own counts.
 void SegmentPlanner::adopt(SegmentSizes& s, std::size_t emitted, std::uint32_t overflow_count)
 {
-  if (s.planned > 0 && !s.exact_plan) s.spilled = std::min<std::size_t>(overflow_count, emitted / 2);
+  if ((s.planned > 0 || s.fresh > 0) && !s.exact_plan)
+    s.spilled = std::min<std::size_t>(overflow_count, emitted / 2);
   s.planned = s.segments;
   s.planned_total = emitted;
   s.fresh = 0;
