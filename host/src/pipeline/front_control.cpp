@@ -32,9 +32,10 @@ std::vector<NodePair> FrontControl::first_front() const
   // levels finer where boxes overlap, there are enough groups for the device to run
   // them in many waves, each over a smaller region of the trees, so that the long ones
   // overlap the others, and the front stays in the trees' order, which warm steps read
-  // fastest. H200, the cold step's wall time: cloth-ball 9.2-9.7 -> 6.2 ms, n-body
-  // 11.4-13.5 -> 10.6, armadillo-rollers 6.8-7.6 -> 5.8, rod-twist 5.0 -> 4.4 (four
-  // levels: 7.2, 9.0, 6.8, 4.5); warm steps within their spread. The coarse cut's
+  // fastest. H200, the cold step's wall time, two calls: cloth-ball 9.2-9.7 -> 6.0-6.2
+  // ms, n-body 11.4-13.5 -> 8.4-10.6, armadillo-rollers 6.5-7.6 -> 5.6-5.8, rod-twist
+  // 4.9-5.0 -> 4.2-4.4 (four levels: 7.2, 9.0, 6.8, 4.5); warm steps within their
+  // spread. The coarse cut's
   // pairs dealt to the groups in runs of eight gained about as much, but the front came
   // out of the trees' order and every warm step read it 3-8% slower. A deferred front
   // keeps the cut its budget allows.
