@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <map>
 #include <optional>
 
@@ -97,12 +98,16 @@ struct Detector::State {
               device.loop_trip_limit() != 0),
         ids(layout)
   {
+    // The first front is refined on the host's threads while the programs build and the
+    // scene goes up (cloth-ball: 23 ms on the H200's host, 26 on 2 cores).
+    const std::vector<NodePair> cut = front.first_cut();
+    std::future<std::vector<NodePair>> seeds =
+        std::async(std::launch::async, [this, &cut] { return front.first_front(cut); });
     // Each kind of detector reads back its own results: a reader builds its sort and
     // pins its host memory as it is made.
     if (o.detects == Detects::contacts) readback.emplace(device, layout, scene, o.solver.precision);
     else close_readback.emplace(device, layout, ids);
-    const std::vector<NodePair> seeds = front.first_front();
-    CcdGraph g = build_ccd_graph(layout, options, seeds.size(), graph_device(device));
+    CcdGraph g = build_ccd_graph(layout, options, cut.size(), graph_device(device));
     streams = g.streams;
     scheduler = std::make_unique<runtime::Scheduler>(device, std::move(g.graph),
                                                      runtime::SchedulerOptions{options.registration, options.profile});
@@ -112,7 +117,7 @@ struct Detector::State {
       ahead.queue_uploads(*scheduler, false);
     });
     if (!has(streams.front)) return;
-    front.install(*scheduler, streams, seeds);
+    front.install(*scheduler, streams, seeds.get());
   }
 
   std::size_t count(runtime::StreamId s) const { return has(s) ? scheduler->count(s) : 0; }

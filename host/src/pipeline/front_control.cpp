@@ -22,10 +22,11 @@ FrontControl::FrontControl(const DetectorOptions& options, const SceneLayout& la
   level_cap_ = deepest_level_;
 }
 
-std::vector<NodePair> FrontControl::first_front() const
+std::vector<NodePair> FrontControl::first_cut() const { return expand_front(*layout_, target_); }
+
+std::vector<NodePair> FrontControl::first_front(const std::vector<NodePair>& cut) const
 {
-  const std::vector<NodePair> seeds = expand_front(*layout_, target_);
-  if (mode_ != FrontMode::exact) return seeds;
+  if (mode_ != FrontMode::exact) return cut;
   // A kept front's first cut is searched once, in the first step, down to the exact
   // front: each work-group searches the subtrees of its pairs, as long as its pairs'
   // together, and the groups near a fold of cloth take far longer than the rest. Eight
@@ -39,7 +40,7 @@ std::vector<NodePair> FrontControl::first_front() const
   // pairs dealt to the groups in runs of eight gained about as much, but the front came
   // out of the trees' order and every warm step read it 3-8% slower. A deferred front
   // keeps the cut its budget allows.
-  return expand_overlapping(*layout_, seeds, 8);
+  return expand_overlapping(*layout_, cut, 8);
 }
 
 void FrontControl::install(runtime::Scheduler& scheduler, const CcdStreams& streams,

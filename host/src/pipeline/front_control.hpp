@@ -22,9 +22,11 @@ public:
   FrontControl(const DetectorOptions& options, const SceneLayout& layout, std::size_t work_items,
                std::size_t work_group, bool bounded_loops);
 
-  // The first front: enough work for the device, within budget, and an exact front's
-  // finer where boxes overlap at the starting positions.
-  std::vector<NodePair> first_front() const;
+  // The first cut of the BVTT: enough work for the device, within budget. The first
+  // front from it: an exact front's finer where boxes overlap at the starting
+  // positions, the others' the cut itself. The graph's first sizes follow the cut.
+  std::vector<NodePair> first_cut() const;
+  std::vector<NodePair> first_front(const std::vector<NodePair>& cut) const;
   // Gives a new scheduler the first front (seeds searched every step spread over the
   // work-groups that search them: spread_over_groups), its limits and the level cap.
   void install(runtime::Scheduler& scheduler, const CcdStreams& streams, const std::vector<NodePair>& seeds) const;
