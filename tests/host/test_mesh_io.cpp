@@ -232,3 +232,24 @@ TEST_CASE("manifests describe objects, kinds, frames and masks", "[host][scene][
   write_text(dir + "/bad4.json", R"({"objects": [{"name": "x", "frames": ["missing.ply"]}]})");
   CHECK_THROWS_WITH(load_scene(dir + "/bad4.json"), Catch::Contains("missing.ply: no such mesh file"));
 }
+
+// A pattern names its frames as they are read: a manifest of a million frames, each
+// name hundreds of characters wide, had held hundreds of megabytes of names (a fuzzed
+// manifest of 911 bytes ran the parser out of memory).
+TEST_CASE("a manifest's frame pattern names each frame as it is read, a million of them at no cost", "[host][scene][quick]")
+{
+  const std::string dir = temp_dir();
+  write_ply(dir + "/cloth_0.ply", tetrahedron());
+  write_ply(dir + "/cloth_" + std::string(199, '0') + "7.ply", tetrahedron());
+  write_text(dir + "/wide.json", R"({"objects": [
+    {"name": "a", "frames": {"pattern": "cloth_%d.ply", "first": 0, "count": 1000000}},
+    {"name": "b", "frames": {"pattern": "cloth_%0200d.ply", "first": 7, "count": 1000000}}
+  ]})");
+  const Scene s = load_scene(dir + "/wide.json");
+  REQUIRE(s.objects.size() == 2);
+  CHECK(s.frame_count() == 1000000);
+  CHECK(s.objects[0].frame_files[999999] == dir + "/cloth_999999.ply");
+  CHECK(s.objects[1].frame_files[999993] == dir + "/cloth_" + std::string(193, '0') + "1000000.ply");
+  CHECK(s.positions(0, 0) == tetrahedron().positions);
+  CHECK_THROWS_WITH(s.positions(0, 1), Catch::Contains("cloth_1.ply"));
+}

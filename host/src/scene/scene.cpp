@@ -10,6 +10,7 @@
 #include <map>
 #include <regex>
 #include <sstream>
+#include <stdexcept>
 
 namespace cstreams {
 
@@ -127,7 +128,7 @@ std::vector<Vec3> Scene::positions(std::uint32_t object, std::size_t frame) cons
   if (frame >= frame_count())
     throw InputError("scene " + name + " has " + std::to_string(frame_count()) + " frames; frame " +
                      std::to_string(frame) + " does not exist");
-  const std::string& file = o.frame_files[std::min(frame, o.frame_files.size() - 1)];
+  const std::string file = o.frame_files[std::min(frame, o.frame_files.size() - 1)];
   const Mesh& first = cache_->first_frames.at(o.frame_files.front());
   const Mesh& mesh = cache_->load(file);
   if (cache_->matched_first != o.frame_files.front()) check_frame(file, mesh, o.frame_files.front(), first);
@@ -191,7 +192,7 @@ long whole_number(const nlohmann::json& object, const char* key, long fallback, 
   return value;
 }
 
-std::vector<std::string> frame_list(const nlohmann::json& frames, const std::string& base, const std::string& where)
+FrameFiles frame_list(const nlohmann::json& frames, const std::string& base, const std::string& where)
 {
   std::vector<std::string> files;
   if (frames.is_string()) {
@@ -209,19 +210,25 @@ std::vector<std::string> frame_list(const nlohmann::json& frames, const std::str
     // Bounded so that first + count - 1 stays an int, and a typo cannot ask for 10^15 files.
     const long first = whole_number(frames, "first", 0, 0, 1000000000, where);
     const long count = whole_number(frames, "count", -1, 1, 1000000, where);
-    for (long i = first; i < first + count; ++i) {
-      char name[4096];
-      std::snprintf(name, sizeof name, pattern.c_str(), int(i));
-      files.push_back(resolve(base, name));
-    }
+    return FrameFiles(base, pattern, first, std::size_t(count));
   } else {
     throw InputError(where + ": \"frames\" must be a file, a list of files or a pattern");
   }
   if (files.empty()) throw InputError(where + ": no frames");
-  return files;
+  return FrameFiles(std::move(files));
 }
 
 }  // namespace
+
+std::string FrameFiles::operator[](std::size_t i) const
+{
+  if (pattern_.empty()) return files_.at(i);
+  if (i >= count_) throw std::out_of_range("frame " + std::to_string(i) + " of " + std::to_string(count_));
+  const long number = first_ + long(i);
+  std::string name(std::size_t(std::snprintf(nullptr, 0, pattern_.c_str(), int(number))), '\0');
+  std::snprintf(name.data(), name.size() + 1, pattern_.c_str(), int(number));
+  return resolve(base_, name);
+}
 
 Scene scene_from_frames(const std::vector<std::string>& frame_files, bool split)
 {

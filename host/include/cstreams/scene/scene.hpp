@@ -30,6 +30,32 @@ ObjectKind parse_object_kind(const std::string& text);
 bool objects_may_collide(std::uint32_t a, std::uint32_t b, ObjectKind kind_a, bool self_collision_a, ObjectKind kind_b,
                          const std::vector<std::pair<std::uint32_t, std::uint32_t>>& ignored);
 
+// The files of an object's frames: a list, or a pattern of one integer field (as in
+// printf, "frame_%04d.ply") over a range of numbers, each name made when asked for, so
+// that a manifest of a million frames (or of a pattern a thousand characters wide)
+// holds no million names.
+class FrameFiles {
+public:
+  FrameFiles() = default;
+  FrameFiles(std::vector<std::string> files) : files_(std::move(files)) {}
+  // Names `base` joined to `pattern` formatted with first, first + 1, ..., first + count - 1.
+  FrameFiles(std::string base, std::string pattern, long first, std::size_t count)
+      : base_(std::move(base)), pattern_(std::move(pattern)), first_(first), count_(count)
+  {
+  }
+
+  std::size_t size() const { return pattern_.empty() ? files_.size() : count_; }
+  bool empty() const { return size() == 0; }
+  std::string operator[](std::size_t i) const;
+  std::string front() const { return (*this)[0]; }
+
+private:
+  std::vector<std::string> files_;
+  std::string base_, pattern_;
+  long first_ = 0;
+  std::size_t count_ = 0;
+};
+
 // One object of a scene: a triangle mesh, how it moves, and where its frames are.
 struct SceneObject {
   std::string name;
@@ -39,7 +65,7 @@ struct SceneObject {
   // Frame files (one for a static object). When several objects share files (the
   // components of one mesh), `vertices` maps this object's vertex i to vertex
   // vertices[i] of the file; empty means the identity.
-  std::vector<std::string> frame_files;
+  FrameFiles frame_files;
   std::vector<std::uint32_t> vertices;
 };
 
