@@ -11,11 +11,15 @@ cstreams=${1:-build/bin/cstreams}
 out=${2:-bench-out}
 data=scenes/benchmarks/scalable-ccd-sample
 mkdir -p "$out"
-wall() { "$cstreams" run "$@" --no-profile --json "$out/wall.json" >/dev/null
-  python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['median_host_ms'])" "$out/wall.json"; }
+# Runs cstreams with the arguments after the first, unprofiled, and prints the fields
+# of its JSON report that the first names (comma-separated), joined by ":".
+report() { local fields=$1; shift
+  "$cstreams" run "$@" --no-profile --json "$out/run.json" >/dev/null
+  python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print(':'.join(str(j[f]) for f in sys.argv[2].split(',')))" \
+    "$out/run.json" "$fields"; }
+wall() { report median_host_ms "$@"; }
 # A cold run's wall time and the time to make its detector, as "wall:setup".
-cold() { "$cstreams" run "$@" --no-profile --json "$out/cold.json" >/dev/null
-  python3 -c "import json,sys; j=json.load(open(sys.argv[1])); print(f\"{j['median_host_ms']}:{j['detector_ms']}\")" "$out/cold.json"; }
+cold() { report median_host_ms,detector_ms "$@"; }
 steps=${STEPS:-cloth-funnel:227:228 rod-twist:3036:3037 armadillo-rollers:326:327 \
 n-body-simulation:balls16_18:balls16_19 cloth-ball:cloth_ball92:cloth_ball93}
 for step in $steps; do

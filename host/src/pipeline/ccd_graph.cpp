@@ -217,8 +217,8 @@ struct GraphBuilder {
   ContactStreams candidate_streams() const
   {
     ContactStreams out = {{s.vf, ContactKind::vertex_face}, {s.ee, ContactKind::edge_edge}};
-    if (s.kept_vf != runtime::StreamId{}) out.emplace_back(s.kept_vf, ContactKind::vertex_face);
-    if (s.kept_ee != runtime::StreamId{}) out.emplace_back(s.kept_ee, ContactKind::edge_edge);
+    if (has(s.kept_vf)) out.emplace_back(s.kept_vf, ContactKind::vertex_face);
+    if (has(s.kept_ee)) out.emplace_back(s.kept_ee, ContactKind::edge_edge);
     return out;
   }
 

@@ -47,7 +47,7 @@ using Sized = std::function<std::size_t(std::size_t)>;
 // refinement then runs the non-penetration filter the screen left out.
 bool screens_in_float(const TestInputs& in, const SolverOptions& solver)
 {
-  return solver.precision == Precision::double_ && in.x0_float != runtime::StreamId{};
+  return solver.precision == Precision::double_ && has(in.x0_float);
 }
 
 // The cubic solver's one pass over every candidate stream.
@@ -58,7 +58,7 @@ void add_cubic_test(runtime::StreamGraph& g, const TestInputs& in, const SolverO
   const StreamId vf = contacts[0].first, ee = contacts[1].first;
   // In a scene of objects, in the steps that report earliest times alone, the test
   // lowers each object's time itself and skips the pairs that cannot lower it.
-  const bool objects = in.earliest != StreamId{};
+  const bool objects = has(in.earliest);
   const std::string cubic_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "");
   auto& test = g.pass("test candidates", {"ccd/narrow_phase_pairs.cl", "cs_cubic_pairs", cubic_options})
                    .emit(vf)
@@ -167,8 +167,8 @@ void add_refinement(runtime::StreamGraph& g, const TestInputs& in, const SolverO
                     const std::string& options, runtime::StreamId open, const ContactStreams& contacts,
                     runtime::StreamId escalated)
 {
-  const bool objects = in.object_contacts != runtime::StreamId{};
-  const bool escalating = escalated != runtime::StreamId{};
+  const bool objects = has(in.object_contacts);
+  const bool escalating = has(escalated);
   auto& pass = add_refine_pass(g, "refine open queries", in, solver, solver.precision, device, options, open, objects,
                                escalating, solver.filter && screens_in_float(in, solver));
   pass.emit(contacts[0].first).emit(contacts[1].first);
@@ -225,7 +225,7 @@ TestStreams add_elementary_tests(runtime::StreamGraph& g, const TestInputs& in, 
     return out;
   }
   const StreamId open = add_conservative_screen(g, in, solver, options, sized);
-  const bool escalating = escalates(solver, device) && in.x0_exact != StreamId{};
+  const bool escalating = escalates(solver, device) && has(in.x0_exact);
   if (escalating) out.escalated = g.variable("escalated queries", 16, sized(256));
   add_refinement(g, in, solver, device, options, open, out.contacts, out.escalated);
   if (!escalating) return out;

@@ -168,7 +168,7 @@ std::vector<ElementaryResult> DeviceSolver::solve(ContactKind kind, const std::v
     s.upload(g.x0, f0.rounded.data(), start.size());
     s.upload(g.x1, f1.rounded.data(), end.size());
     s.set(g.exact_floats, cl_uint(f0.exact && f1.exact));
-    if (g.x0_exact != runtime::StreamId{}) {
+    if (has(g.x0_exact)) {
       s.upload(g.x0_exact, start);
       s.upload(g.x1_exact, end);
     }
