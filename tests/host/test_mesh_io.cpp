@@ -252,4 +252,9 @@ TEST_CASE("a manifest's frame pattern names each frame as it is read, a million 
   CHECK(s.objects[1].frame_files[999993] == dir + "/cloth_" + std::string(193, '0') + "1000000.ply");
   CHECK(s.positions(0, 0) == tetrahedron().positions);
   CHECK_THROWS_WITH(s.positions(0, 1), Catch::Contains("cloth_1.ply"));
+  // A field wider than a path can be is refused as the manifest is read: printf cannot
+  // make such a name (a fuzzed field 100 digits wide ended the parser).
+  write_text(dir + "/wider.json", R"({"objects": [{"name": "a", "frames": {"pattern": "cloth_%04096d.ply", "count": 2}}]})");
+  CHECK_THROWS_WITH(load_scene(dir + "/wider.json"),
+                    Catch::Contains("wider.json: object a") && Catch::Contains("4096 characters wide; at most 4095"));
 }

@@ -204,9 +204,16 @@ FrameFiles frame_list(const nlohmann::json& frames, const std::string& base, con
     }
   } else if (frames.is_object()) {
     const std::string pattern = frames.value("pattern", "");
-    static const std::regex one_integer(R"(^[^%]*%0?[0-9]*d[^%]*$)");
-    if (!std::regex_match(pattern, one_integer))
+    static const std::regex one_integer(R"(^[^%]*%0?([0-9]*)d[^%]*$)");
+    std::smatch field;
+    if (!std::regex_match(pattern, field, one_integer))
       throw InputError(where + ": \"pattern\" must hold exactly one integer field such as %d or %03d");
+    // A name is made as its frame is read (FrameFiles): a field wider than a path can be
+    // is refused here, where printf would fail or make gigabytes of padding.
+    std::string width = field[1].str();
+    width.erase(0, std::min(width.find_first_not_of('0'), width.size()));
+    if (width.size() > 4 || (!width.empty() && std::stoi(width) > 4095))
+      throw InputError(where + ": the integer field of \"pattern\" is " + width + " characters wide; at most 4095");
     // Bounded so that first + count - 1 stays an int, and a typo cannot ask for 10^15 files.
     const long first = whole_number(frames, "first", 0, 0, 1000000000, where);
     const long count = whole_number(frames, "count", -1, 1, 1000000, where);
