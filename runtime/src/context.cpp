@@ -205,11 +205,16 @@ void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::siz
   if (timeline) timeline->record("readback", out_event(timeline, event));
 }
 
-void Context::read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset)
+Handle<cl_event> Context::read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset,
+                                      Timeline* timeline)
 {
-  if (bytes == 0) return;
-  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, nullptr),
+  if (bytes == 0) return {};
+  cl_event event = nullptr;
+  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, &event),
              "clEnqueueReadBuffer", [&] { return "queueing a read of " + std::to_string(bytes) + " bytes"; });
+  Handle<cl_event> read(event);
+  if (timeline) timeline->record("readback", read);
+  return read;
 }
 
 void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,
@@ -269,7 +274,7 @@ void Context::block_until(const std::vector<Handle<cl_event>>& events)
 {
   const std::vector<cl_event> raw = raw_events(events);
   if (!raw.empty())
-    check(clWaitForEvents(cl_uint(raw.size()), raw.data()), "clWaitForEvents", "waiting for queued uploads");
+    check(clWaitForEvents(cl_uint(raw.size()), raw.data()), "clWaitForEvents", "waiting for queued transfers");
 }
 
 Handle<cl_event> Context::marker()

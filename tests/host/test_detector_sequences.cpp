@@ -254,3 +254,26 @@ TEST_CASE("positions given in any order, some twice, give the contacts of positi
   }
   CHECK(contacts > 0);
 }
+
+// Contacts past the pinned memory (DetectorOptions::pinned_contact_bytes) are read
+// through it in chunks, half of it at a time, into ordinary memory. With the median
+// step's contacts pinned, some steps read at once and the others in chunks (the last
+// one short), in turn: each step's contacts must be those read at once.
+TEST_CASE("contacts past the pinned memory come back in chunks as they would at once", "[detector][quick]")
+{
+  const Scene bodies = cstreams::test::generated_scene("n-body", 12, 40);
+  const std::size_t steps = bodies.frame_count() - 1;
+  const auto at_once = run_frames(bodies, DetectorOptions{}, 0, steps);
+  std::vector<std::size_t> sizes;
+  for (const auto& c : at_once) sizes.push_back(c.size());
+  std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+  const std::size_t pinned = sizes[sizes.size() / 2];
+  DetectorOptions chunked;
+  chunked.pinned_contact_bytes = pinned * sizeof(Contact);
+  CHECK(same(at_once, run_frames(bodies, chunked, 0, steps)));
+  // Steps past the pinned memory, each after one within it (whose read gave back the
+  // ordinary memory), in chunks of about half the pinned contacts.
+  const auto fresh_pages = [&](const auto& a, const auto& b) { return a.size() <= pinned && b.size() > pinned; };
+  CHECK(std::adjacent_find(at_once.begin(), at_once.end(), fresh_pages) != at_once.end());
+  CHECK(pinned > 100);
+}

@@ -104,6 +104,11 @@ struct DetectorOptions {
   // First capacity of every variable-length stream; 0 sizes them from the scene.
   // Streams grow as needed either way (tests force tiny capacities to prove it).
   std::size_t initial_capacity = 0;
+  // The most host memory the detector pins for the contacts it reads, in bytes (at
+  // least two contacts' worth). Pinned memory is read fastest but slow to get: NVIDIA's
+  // driver pins about 2 GB/s. A step with more contacts reads them through it in chunks
+  // into ordinary memory, kept while later steps need it.
+  std::size_t pinned_contact_bytes = std::size_t(64) << 20;
 };
 
 // What detect() reads back.

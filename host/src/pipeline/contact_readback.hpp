@@ -12,7 +12,9 @@
 #include <cstreams/runtime/primitives.hpp>
 #include <cstreams/runtime/scheduler.hpp>
 
+#include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,10 +28,29 @@ struct ContactRecord {
   std::string build_options() const;  // contacts.cl's, for records of `words` words
 };
 
+// Host memory the contacts of a step land in where they outgrow the pinned memory:
+// ordinary pages, kept from step to step while steps need them.
+class ContactPages {
+public:
+  // Holds at least `bytes`, what it held lost; gives back memory more than four times
+  // what is asked (a burst of contacts that has passed).
+  void fit(std::size_t bytes);
+  std::byte* data() const noexcept { return data_.get(); }
+  std::size_t bytes() const noexcept { return bytes_; }
+
+private:
+  struct Free {
+    void operator()(std::byte* p) const noexcept;
+  };
+  std::unique_ptr<std::byte, Free> data_;
+  std::size_t bytes_ = 0;
+};
+
 class ContactReadback {
 public:
+  // Pins at most `most_pinned_bytes` of host memory (DetectorOptions::pinned_contact_bytes).
   ContactReadback(runtime::Context& context, const SceneLayout& layout, const SceneDescription& scene,
-                  Precision precision);
+                  Precision precision, std::size_t most_pinned_bytes);
 
   // The contacts of the scheduler's last run, in canonical order, where the read put
   // them: valid until the next read. `stats` receives the device time (with `profile`)
@@ -45,6 +66,10 @@ public:
                    std::vector<runtime::Timeline::Entry>& commands, const std::function<void()>& meanwhile);
 
 private:
+  // Reads `bytes` of `contacts` into pages_ through the pinned memory, half of it at a
+  // time: the device copies into one half while the host's threads copy the other out.
+  const Contact* read_in_chunks(const runtime::Buffer& contacts, std::size_t bytes, runtime::Timeline* events);
+
   runtime::Context& context_;
   bool double_time_;
   ContactRecord record_;
@@ -52,7 +77,9 @@ private:
   runtime::Kernel merge_last_;   // writes Contacts as it merges the last runs
   runtime::Sorter sorter_;
   runtime::Buffer first_vertex_;  // per object
-  runtime::HostStaging staging_;  // the Contacts as read, handed out in place
+  std::size_t most_pinned_;
+  runtime::HostStaging staging_;  // the Contacts as read, handed out in place where they fit
+  ContactPages pages_;            // where they do not
 };
 
 }  // namespace cstreams
