@@ -105,14 +105,26 @@ inline int2 cs_waiting(const int2 p, const int overlap_known) { return overlap_k
 #define CS_EMITS_FACES 2
 #define CS_SEARCHES 4
 
+/* The level of q, the BVTT parent of a pair p at `level`: a node against itself sits two
+ * levels above its children and above a pair of siblings, any other pair one. */
+inline uint cs_parent_level(const int2 q, const uint level) { return level - (q.x == q.y ? 2u : 1u); }
+
 /* A pair of the current front before the group's search: one deeper than `cap` stands
  * for its ancestor at the cap; one whose boxes are apart climbs as far as boxes stay
- * apart and takes its place in the next front where it is on its ancestor's chain of
- * first children; two overlapping leaves are settled here. Returns what it does
- * (CS_EMITS_*, or CS_SEARCHES with `search` the pair to search as it waits,
- * cs_waiting). */
+ * apart, but to no level above `floor`, and takes its place in the next front where it
+ * is on its ancestor's chain of first children; two overlapping leaves are settled
+ * here. Returns what it does (CS_EMITS_*, or CS_SEARCHES with `search` the pair to
+ * search as it waits, cs_waiting).
+ *
+ * The floor bounds what one pair's search may cost once its boxes overlap again: a
+ * whole subtree falls to the work-group that holds the pair, and pairs that climbed
+ * together sit side by side in the front, in one group. On the 1.5M-triangle sheet,
+ * pairs climbed for twenty steps to near the roots, and the step where contact surged
+ * took two launches of the front update of 45-99 ms each, most groups idle; with pairs
+ * kept from climbing above level 18, 24 or 30 alike, 16-21 ms each (H200). */
 inline int cs_front_start(int2 p, __global const int2* nodes, __global const float* node_boxes,
-                          __global const uint* faces, const uint cap, int2* front, uint2* face_pair, int2* search)
+                          __global const uint* faces, const uint cap, const uint floor, int2* front,
+                          uint2* face_pair, int2* search)
 {
   int live = 1;
   while (live && cs_level(nodes, p) > cap) {
@@ -121,6 +133,7 @@ inline int cs_front_start(int2 p, __global const int2* nodes, __global const flo
     p = q;
   }
   if (!live) return 0;
+  uint level = cs_level(nodes, p);
   int apart = 0;
   if (p.x != p.y) {
     /* Most of a settled front's pairs are apart, and so they test their parent too.
@@ -133,11 +146,12 @@ inline int cs_front_start(int2 p, __global const int2* nodes, __global const flo
     cs_dop_load(node_boxes + CS_DOP_FLOATS * (keeps_y ? p.y : p.x), kept);
     apart = cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? p.x : p.y));
     if (apart && CS_KEEP_FRONT) {
-      const int parent_overlaps =
-          q.x < 0 || q.x == q.y || !cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? q.x : q.y));
+      const int parent_overlaps = q.x < 0 || q.x == q.y || cs_parent_level(q, level) < floor ||
+                                  !cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? q.x : q.y));
       *front = p;
       if (parent_overlaps) return CS_EMITS_FRONT;
       if (!cs_is_first_child(nodes, q, p)) return 0;
+      level = cs_parent_level(q, level);
       p = q;
     }
   }
@@ -145,11 +159,12 @@ inline int cs_front_start(int2 p, __global const int2* nodes, __global const flo
     /* p's boxes are apart, as are those of the pair below it that climbed here. */
     while (CS_KEEP_FRONT) {
       const int2 q = cs_bvtt_parent(nodes, p);
-      if (q.x < 0 || cs_pair_overlaps(node_boxes, q)) {
+      if (q.x < 0 || cs_parent_level(q, level) < floor || cs_pair_overlaps(node_boxes, q)) {
         *front = p;
         return CS_EMITS_FRONT;
       }
       if (!cs_is_first_child(nodes, q, p)) return 0;
+      level = cs_parent_level(q, level);
       p = q;
     }
     return 0;
@@ -214,9 +229,10 @@ inline int cs_search_visit(const int2 w, __global const int2* nodes, __global co
 /* One work-item per pair of the current front (a cut of the BVTT: every pair of
  * leaves lies under exactly one of its pairs). With CS_KEEP_FRONT, emits the next front:
  *  - a pair deeper than `cap` stands for its ancestor at level <= cap;
- *  - a pair whose boxes are apart climbs to its highest ancestor whose boxes are apart;
- *    of all the front pairs under that ancestor, the one on its chain of first
- *    children emits it (exactly one is, since the front is a cut);
+ *  - a pair whose boxes are apart climbs to its highest ancestor whose boxes are apart,
+ *    at level `floor` or deeper (cs_front_start); of all the front pairs under that
+ *    ancestor, the one on its chain of first children emits it (exactly one is, since
+ *    the front is a cut);
  *  - a pair whose boxes overlap is searched: the search emits the pairs where it stops
  *    (boxes apart, or two leaves) and the overlapping pairs at the cap, below which it
  *    goes on without emitting.
@@ -237,7 +253,7 @@ inline int cs_search_visit(const int2 w, __global const int2* nodes, __global co
  * runs the step again from a finer front. */
 __kernel void cs_front_update(__global const int2* front, const uint n, __global const int2* nodes,
                               __global const float* node_boxes, __global const uint* faces, const uint cap,
-                              __global uint* cut, CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
+                              const uint floor, __global uint* cut, CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
 {
   CS_FRONT_BEGIN;
   CS_EMITTER_BEGIN(pairs);
@@ -250,7 +266,7 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
   if (s < n) {
     int2 placed = (int2)(0, 0), search = (int2)(0, 0);
     uint2 face_pair = (uint2)(0, 0);
-    const int does = cs_front_start(front[s], nodes, node_boxes, faces, cap, &placed, &face_pair, &search);
+    const int does = cs_front_start(front[s], nodes, node_boxes, faces, cap, floor, &placed, &face_pair, &search);
     if (does & CS_EMITS_FACES) CS_EMIT(pairs, face_pair);
     if (does & CS_EMITS_FRONT) CS_FRONT_EMIT(placed);
     /* One a work-item: the list holds them all. */

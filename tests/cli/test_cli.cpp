@@ -46,6 +46,7 @@ TEST_CASE("numeric flags out of range are refused before any work, naming the fl
   CHECK_THAT(run({"--max-iterations", "-1"}), Catch::Contains("--max-iterations"));
   CHECK_THAT(run({"--max-iterations", "4294967296"}), Catch::Contains("--max-iterations"));
   CHECK_THAT(run({"--front-budget", "0"}), Catch::StartsWith("--front-budget = 0: must be"));
+  CHECK_THAT(run({"--front-climb", "-1"}), Catch::Contains("--front-climb"));
   CHECK_THAT(run({"--repeat", "0"}), Catch::StartsWith("--repeat = 0: must be"));
   CHECK_THAT(run({"--frames", "3abc"}), Catch::StartsWith("--frames '3abc': must be A"));
   CHECK_THAT(run({"--frames", "2:1"}), Catch::Contains("needs A < B"));
@@ -144,6 +145,18 @@ TEST_CASE("run --no-profile reports the same contacts, its wall time and no devi
   CHECK(report["steps"][0]["passes"]["front update"]["ms"].is_null());
   CHECK(report["steps"][0]["device_span_ms"].is_null());
   CHECK(report["steps"][0]["commands"].empty());
+}
+
+TEST_CASE("run --front-climb reaches the detector and leaves the contacts as they are", "[cli][quick]")
+{
+  const fs::path dir = fresh_dir("cstreams-cli-front-climb");
+  const std::string a = funnel_frame("227.ply"), b = funnel_frame("228.ply");
+  execute({"run", a, b, "--repeat", "3", "--out", (dir / "default.csv").string()});
+  execute({"run", a, b, "--repeat", "3", "--front-climb", "0", "--out", (dir / "kept.csv").string(), "--json",
+           (dir / "kept.json").string()});
+  std::ifstream climbed(dir / "default.csv"), kept(dir / "kept.csv");
+  CHECK(std::string(std::istreambuf_iterator<char>(climbed), {}) == std::string(std::istreambuf_iterator<char>(kept), {}));
+  CHECK(nlohmann::json::parse(std::ifstream(dir / "kept.json"))["front_climb_levels"] == 0);
 }
 
 // A user replaying a sequence sees a hitch without a per-step table: the tail names the

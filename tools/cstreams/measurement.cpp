@@ -93,6 +93,8 @@ void add_measure_options(CLI::App& cmd, MeasureOptions& o)
                "again in double");
   cmd.add_option("--front", o.front, "BVTT front: none, exact or deferred");
   cmd.add_option("--front-budget", o.front_budget, "Deferred front: device memory for the front, MiB");
+  cmd.add_option("--front-climb", o.front_climb,
+                 "Kept front: BVTT levels above the deepest to which pairs that move apart may climb");
   cmd.add_option("--memory-budget", o.memory_budget,
                  "Device memory for the whole pipeline, MiB (default: all the device has); registration trades speed "
                  "for memory to stay under it");
@@ -117,6 +119,7 @@ DetectorOptions detector_options(const MeasureOptions& o)
   options.solver.escalate = !o.no_escalation;
   options.front = parse_front_mode(o.front);
   options.front_budget_mb = o.front_budget;
+  options.front_climb_levels = o.front_climb;
   options.registration = runtime::parse_registration(o.registration);
   options.profile = !o.no_profile;
   return options;

@@ -29,6 +29,7 @@ struct MeasureOptions {
   std::uint32_t max_iterations = SolverOptions{}.max_iterations;
   bool no_escalation = false;
   double front_budget = DetectorOptions{}.front_budget_mb;
+  std::uint32_t front_climb = DetectorOptions{}.front_climb_levels;
   // Device memory the whole pipeline may hold, MiB (Context::set_memory_limit); 0: all
   // the device has. Under it, registration gives segments back and falls back to one
   // counter rather than fail; what does not fit even then is an error naming it.

@@ -129,6 +129,7 @@ void run(const RunOptions& o)
                      {"tolerance", o.tolerance},
                      {"front", o.front},
                      {"front_budget_mb", o.front_budget},
+                     {"front_climb_levels", o.front_climb},
                      {"memory_budget_mb", o.memory_budget > 0 ? nlohmann::json(o.memory_budget) : nlohmann::json()},
                      {"registration", o.registration},
                      {"repeat", o.repeat},

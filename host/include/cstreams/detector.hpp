@@ -96,6 +96,15 @@ struct DetectorOptions {
   FrontMode front = FrontMode::exact;
   // Deferred front: device memory for the front (both of its buffers), in MiB.
   double front_budget_mb = 16;
+  // A kept front's pairs climb where boxes move apart, each to its highest ancestor
+  // whose boxes are apart, but to no level nearer the roots than this many BVTT levels
+  // above the deepest pairs of leaves (the roots at most). Where pairs that climbed far
+  // overlap again, each of their whole subtrees falls to one work-group, and the
+  // device waits for the busiest (H200, the 1.5M-triangle sheet: the front update of
+  // the step where contact surges took 95-195 ms with no floor, 35-45 ms with this
+  // one). Higher values keep fewer pairs in the front; contacts are the same whatever
+  // the value.
+  std::uint32_t front_climb_levels = 16;
   runtime::Registration registration = runtime::Registration::segmented_lock;
   // Per-pass device times (OpenCL profiling events). They cost the host 5-7 us a
   // kernel launch (0.4-0.9 ms of a cloth-ball step on the H200); a program that does
