@@ -26,10 +26,12 @@ struct Tree {
   ParamId deepest;
 };
 
-Tree add_tree(StreamGraph& g, std::size_t n, std::size_t round_items, std::size_t round_group)
+Tree add_tree(StreamGraph& g, std::size_t n, std::size_t round_items, std::size_t round_group,
+              std::size_t most_bytes = 0)
 {
   Tree t{g.fixed("values", 4, n), g.variable("counted", 8, 16), g.param("deepest", 4)};
   Worklist list{"test_tree_seed", "test_tree_round", 8, 4, 2 * round_items, round_group};
+  list.most_bytes = most_bytes;
   list.extra_state_bytes = 4;
   list.extra_state_while = t.deepest;
   g.pass("tree", {program, "test_tree_finish"})
@@ -260,5 +262,42 @@ TEST_CASE("a work list run in slices reports the rounds and items of all of them
     }
     peak = context.memory_high_water();
     whole_rounds = tree.rounds;
+  }
+}
+
+// A work list that may take less than its inputs need (Worklist::most_bytes) runs in
+// slices of them, as where the device has no memory left, and the slices together
+// count every leaf; the next run starts in slices at once. A single input is refined
+// whole whatever the list may take.
+TEST_CASE("a work list held under its most bytes runs in slices, losing no item", "[runtime][scheduler][worklist][quick]")
+{
+  const std::size_t n = 3001;
+  const auto v = random_values(n, 37);
+  const auto leaves = [](const std::vector<Pair>& counted) {
+    std::vector<std::uint32_t> c;
+    for (const Pair& p : counted) c.push_back(p[1]);
+    return sorted(c);
+  };
+  // The state (4 bytes an input) and two lists of 8-byte items for the inputs: about
+  // 66 KB for all of them, 23 KB for a slice of 1024.
+  for (const std::size_t most : {std::size_t(0), std::size_t(40000)}) {
+    INFO("most bytes " << most);
+    auto& ctx = cstreams::test::device();
+    StreamGraph g;
+    const Tree tree_streams = add_tree(g, n, ctx.work_group_size(), 0, most);
+    g.gather(tree_streams.counted);
+    Scheduler s(ctx, g);
+    s.set(tree_streams.deepest, cl_uint(0));
+    s.upload(tree_streams.values, v);
+    for (int frame = 0; frame < 2; ++frame) {
+      s.run();
+      CHECK(leaves(s.download<Pair>(tree_streams.counted)) == leaves(tree_counts(v, false)));
+      CHECK(s.stats().passes.at(0).list_items == tree_items(v));
+      if (most) CHECK(s.stats().slices >= 2);
+      else CHECK(s.stats().slices == 1);
+    }
+    s.upload(tree_streams.values, std::vector<std::uint32_t>{v[0]});
+    s.run();
+    CHECK(leaves(s.download<Pair>(tree_streams.counted)) == leaves(tree_counts({v[0]}, false)));
   }
 }

@@ -111,6 +111,8 @@ runtime::StreamId add_conservative_screen(runtime::StreamGraph& g, const TestInp
   return open;
 }
 
+constexpr std::size_t most_refinement_bytes = std::size_t(512) << 20;
+
 // A refinement of queries in `precision`: one box a work-item, breadth first across the
 // device (refine.cl). An item is a query index, its work and a box of six reals; the
 // state of a query two keys of at most one real each (a float on devices without 64-bit
@@ -140,6 +142,10 @@ runtime::PassSpec& add_refine_pass(runtime::StreamGraph& g, const std::string& n
     boxes.extra_state_bytes = 12;
     boxes.extra_state_while = in.earliest_only;
   }
+  // A burst of open queries is refined in slices: the 1.5M-triangle sheet's surge step
+  // (9.6M queries in double) held 1.8 GB of state and lists at once, more than half its
+  // peak. A real step's refinement takes 60-140 MB.
+  boxes.most_bytes = most_refinement_bytes;
   const std::string refine_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") +
                                      (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "") +
                                      (escalating ? " -DCS_ESCALATE=1" : "");

@@ -90,6 +90,11 @@ struct Worklist {
   // is nonzero, so that runs without the mode hold none of it.
   std::size_t extra_state_bytes = 0;
   ParamId extra_state_while{};
+  // The most device memory the state and both lists may take for the pass's inputs
+  // (0: what the device has): a run whose inputs need more goes in slices of them, as
+  // where the device has no memory left (Scheduler), each slice refined in turn. Lists
+  // still grow past it where a slice's rounds widen.
+  std::size_t most_bytes = 0;
 };
 
 // One kernel over the items of a stream, and what it reads and writes.
