@@ -137,6 +137,15 @@ TEST_CASE("bad arrays and parameters name themselves and leave the object usable
   fails_naming([&] { ccd.toi(p.V, bad); }, "V1");
   bad(2, 1) = 1e300;
   fails_naming([&] { ccd.is_step_collision_free(p.V, bad); }, "V1");
+  // Row-major doubles are read in place, where the detector's own check finds the bad
+  // value: the argument is still the one named.
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  Rows bad_rows = V1;
+  bad_rows(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  fails_naming([&] { ccd.toi(Rows(p.V), bad_rows); }, "V1: row 2");
+  bad_rows = p.V;
+  bad_rows(3, 0) = -1e300;
+  fails_naming([&] { ccd.collision_free_stepsize(bad_rows, Rows(V1)); }, "V0: row 3");
   fails_naming([&] { ccd.toi(p.V, Eigen::MatrixXd(V1.leftCols(2))); }, "V1");
   CcdParameters wrong;
   wrong.tmax = 0;

@@ -10,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <limits>
 #include <random>
 
 using namespace cstreams;
@@ -136,6 +137,12 @@ TEST_CASE("candidates and bad input of the proximity calls", "[simulation]")
   CHECK_THROWS_WITH(proximity.close_pairs(p.V, 0), Catch::StartsWith("dhat = 0: must be"));
   CHECK_THROWS_WITH(proximity.candidates(p.V, -1), Catch::StartsWith("radius = -1: must be"));
   CHECK_THROWS_WITH(proximity.close_pairs(p.V.topRows(4), 0.1), Catch::StartsWith("V:"));
+  // A bad value copied (column-major) or read in place (row-major) is named alike.
+  Eigen::MatrixXd bad = p.V;
+  bad(5, 2) = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(proximity.close_pairs(bad, 0.03), Catch::StartsWith("V: row 5"));
+  const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> bad_rows = bad;
+  CHECK_THROWS_WITH(proximity.candidates(bad_rows, 0.03), Catch::StartsWith("V: row 5"));
   CHECK_FALSE(proximity.close_pairs(p.V, 0.03).empty());
 }
 

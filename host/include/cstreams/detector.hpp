@@ -171,13 +171,13 @@ public:
   Detector& operator=(const Detector&) = delete;
 
   std::uint32_t object(const std::string& name) const;
-  // The positions at the end of the next step. They are copied (the vector may change
+  // The positions at the end of the next step. They are copied (the memory may change
   // on return) and go up with every object's as the next detect() starts: one write
   // per run of adjacent objects, not one per object.
-  void set_positions(std::uint32_t object, const std::vector<Vec3>& end);
+  void set_positions(std::uint32_t object, PositionSpan end);
   // Both ends of the next step (replaying recorded frames, repeating a step), copied
   // and uploaded as set_positions().
-  void set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end);
+  void set_step(std::uint32_t object, PositionSpan start, PositionSpan end);
   // The positions at the end of the step after the next one, where they are known
   // before the next step runs (replaying recorded frames): rounded, copied and uploaded
   // while the next detect() runs, they become the ends of the step after it when it

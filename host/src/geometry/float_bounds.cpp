@@ -69,13 +69,13 @@ bool finite_floats(const double* d, std::size_t begin, std::size_t end)
 
 }  // namespace
 
-void check_float_positions(const std::vector<Vec3>& x)
+void check_float_positions(PositionSpan x)
 {
   // In blocks over several threads, as round_to_float() rounds: positions uploaded
   // ahead are checked as they are given, on the caller's path (two of n-body's
   // frames, 73K vertices each, took 0.13 ms longer to check in one thread than to round
   // in blocks).
-  const double* d = x.empty() ? nullptr : x.front().data();
+  const double* d = x.coordinates();
   const std::size_t n = 3 * x.size();
   const bool finite =
       n < 2 * coordinates_a_task
@@ -129,10 +129,9 @@ FloatRounding round_range(const double* d, float* out, double* copy, std::size_t
 
 }  // namespace
 
-FloatRounding round_to_float(const std::vector<Vec3>& x, float* out, Vec3* copy)
+FloatRounding round_to_float(PositionSpan x, float* out, Vec3* copy)
 {
-  static_assert(sizeof(Vec3) == 3 * sizeof(double), "positions are read as one array of coordinates");
-  const double* d = x.empty() ? nullptr : x.front().data();
+  const double* d = x.coordinates();
   double* c = copy ? copy->data() : nullptr;
   const std::size_t n = 3 * x.size();
   if (n < 2 * coordinates_a_task) return round_range(d, out, c, 0, n);

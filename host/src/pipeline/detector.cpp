@@ -159,8 +159,7 @@ struct Detector::State {
   // Stages one object's positions for a float stream and, in double precision, its
   // exact twin, uncommitted (PositionWrites::commit), and checks its coordinates as it
   // rounds them.
-  FloatRounding stage_positions(runtime::StreamId single, runtime::StreamId exact, std::uint32_t o,
-                                const std::vector<Vec3>& x)
+  FloatRounding stage_positions(runtime::StreamId single, runtime::StreamId exact, std::uint32_t o, PositionSpan x)
   {
     const std::size_t first = layout.slots[layout.slot_of[o]].first_vertex, n = x.size();
     float* const rounded = static_cast<float*>(given.stage(single, first, n, 3 * sizeof(float)));
@@ -170,7 +169,7 @@ struct Detector::State {
 
   // Positions given for the next step's ends: staged together, or (a coordinate that is
   // not a finite float) none of them, and an InputError that names the coordinate.
-  void stage_ends(std::uint32_t o, const std::vector<Vec3>* start, const std::vector<Vec3>& end)
+  void stage_ends(std::uint32_t o, const PositionSpan* start, PositionSpan end)
   {
     const FloatRounding r0 = start ? stage_positions(streams.x0, streams.x0_double, o, *start) : FloatRounding{};
     const FloatRounding r1 = stage_positions(streams.x1, streams.x1_double, o, end);
@@ -256,7 +255,7 @@ std::uint32_t Detector::object(const std::string& name) const
   throw InputError("no object named '" + name + "'");
 }
 
-void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
+void Detector::set_positions(std::uint32_t object, PositionSpan end)
 {
   State& s = *state_;
   s.check_usable();
@@ -264,7 +263,7 @@ void Detector::set_positions(std::uint32_t object, const std::vector<Vec3>& end)
   s.guarded([&] { s.stage_ends(object, nullptr, end); });
 }
 
-void Detector::set_step(std::uint32_t object, const std::vector<Vec3>& start, const std::vector<Vec3>& end)
+void Detector::set_step(std::uint32_t object, PositionSpan start, PositionSpan end)
 {
   State& s = *state_;
   s.check_usable();

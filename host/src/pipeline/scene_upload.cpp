@@ -36,7 +36,7 @@ void write_positions(runtime::Scheduler& scheduler, const SceneLayout& layout, r
 
 }  // namespace
 
-void check_moving_object(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+void check_moving_object(const SceneDescription& scene, std::uint32_t o, PositionSpan x)
 {
   if (o >= scene.objects.size())
     throw InputError("no object " + std::to_string(o) + " in a scene of " + std::to_string(scene.objects.size()));
@@ -47,7 +47,7 @@ void check_moving_object(const SceneDescription& scene, std::uint32_t o, const s
                      std::to_string(x.size()));
 }
 
-void check_positions(const SceneDescription& scene, std::uint32_t o, const std::vector<Vec3>& x)
+void check_positions(const SceneDescription& scene, std::uint32_t o, PositionSpan x)
 {
   check_moving_object(scene, o, x);
   try {

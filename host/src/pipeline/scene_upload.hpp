@@ -21,7 +21,7 @@ std::vector<bool> upload_scene(runtime::Scheduler& scheduler, const CcdGraph& gr
 // The checks a moving object's positions from a caller must pass (an InputError naming
 // the object): all of them, or all but that of the coordinates (which rounding to float
 // makes in the same pass, round_to_float()).
-void check_positions(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
-void check_moving_object(const SceneDescription& scene, std::uint32_t object, const std::vector<Vec3>& x);
+void check_positions(const SceneDescription& scene, std::uint32_t object, PositionSpan x);
+void check_moving_object(const SceneDescription& scene, std::uint32_t object, PositionSpan x);
 
 }  // namespace cstreams

@@ -25,3 +25,13 @@ void throw_bad_index(const char* name, std::ptrdiff_t row, long long index, std:
 }
 
 }  // namespace cstreams::details
+
+namespace cstreams {
+
+void name_bad_positions(PositionSpan x, const char* name)
+{
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (!details::fits_float(x[i])) details::throw_not_finite(name, std::ptrdiff_t(i));
+}
+
+}  // namespace cstreams

@@ -56,25 +56,32 @@ struct MeshCcd::State {
 
   // Runs the step V0 -> V0 + tmax (V1 - V0) for the earliest times alone: whether
   // anything collides, and when (in the motion's own time).
-  std::pair<bool, double> earliest(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, const CcdParameters& p)
+  std::pair<bool, double> earliest(PositionSpan V0, PositionSpan V1, const CcdParameters& p)
   {
     check_parameters(p);
     check_count("V0", V0);
     check_count("V1", V1);
     Detector& d = detector_for(p);
-    if (p.tmax < 1) {
-      scaled_end.resize(V0.size());
-      for (std::size_t v = 0; v < V0.size(); ++v) scaled_end[v] = V0[v] + p.tmax * (V1[v] - V0[v]);
-      d.set_step(0, V0, scaled_end);
-    } else {
-      d.set_step(0, V0, V1);
+    try {
+      if (p.tmax < 1) {
+        scaled_end.resize(V0.size());
+        for (std::size_t v = 0; v < V0.size(); ++v) scaled_end[v] = V0[v] + p.tmax * (V1[v] - V0[v]);
+        d.set_step(0, V0, scaled_end);
+      } else {
+        d.set_step(0, V0, V1);
+      }
+    } catch (const InputError&) {
+      // Arrays read in place were checked only by the detector, which names its object.
+      name_bad_positions(V0, "V0");
+      name_bad_positions(V1, "V1");
+      throw;
     }
     d.detect(Report::earliest_toi);
     if (d.stats().contacts == 0) return {false, 1.0};
     return {true, d.earliest_toi()[0] * p.tmax};
   }
 
-  void check_count(const char* name, const std::vector<Vec3>& x) const
+  void check_count(const char* name, PositionSpan x) const
   {
     if (x.size() != mesh.vertex_count())
       throw InputError(std::string(name) + ": has " + std::to_string(x.size()) + " rows; the mesh has " +
@@ -91,10 +98,20 @@ MeshCcd::~MeshCcd() = default;
 
 double MeshCcd::toi(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, const CcdParameters& parameters)
 {
+  return toi(PositionSpan(V0), PositionSpan(V1), parameters);
+}
+
+double MeshCcd::toi(PositionSpan V0, PositionSpan V1, const CcdParameters& parameters)
+{
   return state_->earliest(V0, V1, parameters).second;
 }
 
 bool MeshCcd::is_step_collision_free(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, double min_distance)
+{
+  return is_step_collision_free(PositionSpan(V0), PositionSpan(V1), min_distance);
+}
+
+bool MeshCcd::is_step_collision_free(PositionSpan V0, PositionSpan V1, double min_distance)
 {
   CcdParameters p;
   p.min_distance = min_distance;
@@ -102,6 +119,12 @@ bool MeshCcd::is_step_collision_free(const std::vector<Vec3>& V0, const std::vec
 }
 
 double MeshCcd::collision_free_stepsize(const std::vector<Vec3>& V0, const std::vector<Vec3>& V1, double min_distance,
+                                        double conservative_rescaling)
+{
+  return collision_free_stepsize(PositionSpan(V0), PositionSpan(V1), min_distance, conservative_rescaling);
+}
+
+double MeshCcd::collision_free_stepsize(PositionSpan V0, PositionSpan V1, double min_distance,
                                         double conservative_rescaling)
 {
   check_option("conservative_rescaling", conservative_rescaling, option_ranges::conservative_rescaling);

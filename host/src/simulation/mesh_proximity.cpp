@@ -17,7 +17,7 @@ struct MeshProximity::State {
   double built_for = 0;
   std::vector<Vec3> copy;
 
-  Detector& run(const std::vector<Vec3>& V, double dhat, const char* name)
+  Detector& run(PositionSpan V, double dhat, const char* name)
   {
     check_option(name, dhat, option_ranges::dhat);
     if (V.size() != mesh.vertex_count())
@@ -37,7 +37,13 @@ struct MeshProximity::State {
       detector = std::make_unique<Detector>(device, std::move(scene), d);
       built_for = dhat;
     }
-    detector->set_positions(0, V);
+    try {
+      detector->set_positions(0, V);
+    } catch (const InputError&) {
+      // Arrays read in place were checked only by the detector, which names its object.
+      name_bad_positions(V, "V");
+      throw;
+    }
     detector->detect();
     return *detector;
   }
@@ -52,10 +58,20 @@ MeshProximity::~MeshProximity() = default;
 
 const std::vector<ClosePair>& MeshProximity::close_pairs(const std::vector<Vec3>& V, double dhat)
 {
+  return close_pairs(PositionSpan(V), dhat);
+}
+
+const std::vector<ClosePair>& MeshProximity::close_pairs(PositionSpan V, double dhat)
+{
   return state_->run(V, dhat, "dhat").close_pairs();
 }
 
 CandidateBlock MeshProximity::candidates(const std::vector<Vec3>& V, double radius)
+{
+  return candidates(PositionSpan(V), radius);
+}
+
+CandidateBlock MeshProximity::candidates(PositionSpan V, double radius)
 {
   Candidates all = state_->run(V, radius, "radius").candidates();
   return all.blocks.empty() ? CandidateBlock{} : std::move(all.blocks.front());

@@ -38,7 +38,7 @@ struct FloatPositions {
 std::vector<float> to_float_positions(const std::vector<Vec3>& x);
 // The halves of that: the check, and the rounding to nearest, into a new array or into
 // `out` (3 floats a vertex).
-void check_float_positions(const std::vector<Vec3>& x);
+void check_float_positions(PositionSpan x);
 FloatPositions rounded_positions(const std::vector<Vec3>& x);
 // Rounding into `out` checks as it goes, in the same pass: whether every coordinate is
 // a finite float (else `out` is of no use, and check_float_positions() names the first
@@ -48,6 +48,6 @@ FloatPositions rounded_positions(const std::vector<Vec3>& x);
 struct FloatRounding {
   bool finite = true, exact = true;
 };
-FloatRounding round_to_float(const std::vector<Vec3>& x, float* out, Vec3* copy = nullptr);
+FloatRounding round_to_float(PositionSpan x, float* out, Vec3* copy = nullptr);
 
 }  // namespace cstreams

@@ -1,8 +1,9 @@
 #pragma once
 // Arrays as simulators hold them (ipc-toolkit's conventions): positions an Eigen matrix
 // of #V rows and 3 columns, double or float; faces #F x 3 and edges #E x 2 of integer
-// indices. Either storage order. Each is checked as it is copied, and an InputError
-// names the argument, the row and what was wrong.
+// indices. Either storage order. Each is checked as it is copied (or, positions laid out
+// as the detector reads them, where they are read), and an InputError names the
+// argument, the row and what was wrong.
 #include <cstreams/geometry/mesh.hpp>
 
 #include <Eigen/Core>
@@ -23,6 +24,12 @@ namespace details {
                                   std::size_t want_cols);
 [[noreturn]] void throw_not_finite(const char* name, std::ptrdiff_t row);
 [[noreturn]] void throw_bad_index(const char* name, std::ptrdiff_t row, long long index, std::size_t vertices);
+// Finite and within float's range, which the device computes in.
+inline bool fits_float(const Vec3& x)
+{
+  constexpr double largest = std::numeric_limits<float>::max();
+  return std::abs(x[0]) <= largest && std::abs(x[1]) <= largest && std::abs(x[2]) <= largest;
+}
 }  // namespace details
 
 // Copies positions V (#V x 3; `rows` of them where rows > 0) in double into `out`,
@@ -35,14 +42,34 @@ void positions_into(const Eigen::MatrixBase<Derived>& V, const char* name, std::
   static_assert(std::is_floating_point_v<typename Derived::Scalar>, "positions are float or double");
   if (V.cols() != 3 || (rows > 0 && std::size_t(V.rows()) != rows)) details::throw_bad_shape(name, V.rows(), V.cols(), rows, 3);
   out.resize(std::size_t(V.rows()));
-  constexpr double largest = std::numeric_limits<float>::max();
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
     const Vec3 x(double(V(i, 0)), double(V(i, 1)), double(V(i, 2)));
-    if (!(std::abs(x[0]) <= largest && std::abs(x[1]) <= largest && std::abs(x[2]) <= largest))
-      details::throw_not_finite(name, i);
+    if (!details::fits_float(x)) details::throw_not_finite(name, i);
     out[std::size_t(i)] = x;
   }
 }
+
+// Positions V for a call: read in place where they lie as the detector reads them, three
+// doubles a row one row after the other (a row-major matrix, or a numpy float64 array in
+// C order), else copied into `copy` as positions_into() does. In place, only the shape
+// is checked here; the detector checks the values as it reads them, and where it finds
+// a bad one, name_bad_positions() names the argument and the row.
+template <typename Derived>
+PositionSpan positions_view(const Eigen::MatrixBase<Derived>& V, const char* name, std::size_t rows,
+                            std::vector<Vec3>& copy)
+{
+  if constexpr (std::is_same_v<typename Derived::Scalar, double> && bool(int(Derived::Flags) & Eigen::DirectAccessBit)) {
+    if (V.cols() == 3 && std::size_t(V.rows()) == rows && V.derived().colStride() == 1 &&
+        (V.rows() < 2 || V.derived().rowStride() == 3))
+      return PositionSpan(V.derived().data(), rows);
+  }
+  positions_into(V, name, rows, copy);
+  return copy;
+}
+
+// Throws the InputError positions_into() would for the first coordinate of x that is not
+// a finite float; returns where every one is.
+void name_bad_positions(PositionSpan x, const char* name);
 
 template <typename Derived>
 std::vector<Vec3> positions_from(const Eigen::MatrixBase<Derived>& V, const char* name, std::size_t rows = 0)

@@ -94,18 +94,20 @@ public:
   const DetectorStats& stats() const;
 
 private:
-  // The arrays' copies, in memory kept from call to call.
-  template <typename A> const std::vector<Vec3>& start(const Eigen::MatrixBase<A>& V0)
+  // The arrays where they lie as the detector reads them, else copies in memory kept
+  // from call to call (positions_view).
+  template <typename A> PositionSpan start(const Eigen::MatrixBase<A>& V0)
   {
-    positions_into(V0, "V0", vertex_count(), copies(0));
-    return copies(0);
+    return positions_view(V0, "V0", vertex_count(), copies(0));
   }
-  template <typename A> const std::vector<Vec3>& end(const Eigen::MatrixBase<A>& V1)
+  template <typename A> PositionSpan end(const Eigen::MatrixBase<A>& V1)
   {
-    positions_into(V1, "V1", vertex_count(), copies(1));
-    return copies(1);
+    return positions_view(V1, "V1", vertex_count(), copies(1));
   }
   std::vector<Vec3>& copies(int end);
+  double toi(PositionSpan V0, PositionSpan V1, const CcdParameters& parameters);
+  bool is_step_collision_free(PositionSpan V0, PositionSpan V1, double min_distance);
+  double collision_free_stepsize(PositionSpan V0, PositionSpan V1, double min_distance, double conservative_rescaling);
 
   struct State;
   std::unique_ptr<State> state_;

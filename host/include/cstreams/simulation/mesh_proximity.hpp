@@ -39,8 +39,7 @@ public:
   // valid until the next call (copy them to keep them).
   template <typename A> const std::vector<ClosePair>& close_pairs(const Eigen::MatrixBase<A>& V, double dhat)
   {
-    positions_into(V, "V", vertex_count(), copy());
-    return close_pairs(copy(), dhat);
+    return close_pairs(positions_view(V, "V", vertex_count(), copy()), dhat);
   }
   const std::vector<ClosePair>& close_pairs(const std::vector<Vec3>& V, double dhat);
 
@@ -49,8 +48,7 @@ public:
   // as ipc-toolkit's inflation radius), sorted.
   template <typename A> CandidateBlock candidates(const Eigen::MatrixBase<A>& V, double radius)
   {
-    positions_into(V, "V", vertex_count(), copy());
-    return candidates(copy(), radius);
+    return candidates(positions_view(V, "V", vertex_count(), copy()), radius);
   }
   CandidateBlock candidates(const std::vector<Vec3>& V, double radius);
 
@@ -59,7 +57,11 @@ public:
   const DetectorStats& stats() const;  // the last call's
 
 private:
-  std::vector<Vec3>& copy();  // the Eigen calls' V, in memory kept from call to call
+  // The Eigen calls' V where it must be copied (positions_view), in memory kept from
+  // call to call.
+  std::vector<Vec3>& copy();
+  const std::vector<ClosePair>& close_pairs(PositionSpan V, double dhat);
+  CandidateBlock candidates(PositionSpan V, double radius);
 
   struct State;
   std::unique_ptr<State> state_;
