@@ -230,9 +230,9 @@ inline int cs_search_visit(const int2 w, __global const int2* nodes, __global co
  * leaves lies under exactly one of its pairs). With CS_KEEP_FRONT, emits the next front:
  *  - a pair deeper than `cap` stands for its ancestor at level <= cap;
  *  - a pair whose boxes are apart climbs to its highest ancestor whose boxes are apart,
- *    at level `floor` or deeper (cs_front_start); of all the front pairs under that
- *    ancestor, the one on its chain of first children emits it (exactly one is, since
- *    the front is a cut);
+ *    no higher than `climb` levels above the deepest (cs_front_start); of all the
+ *    front pairs under that ancestor, the one on its chain of first children emits it
+ *    (exactly one is, since the front is a cut);
  *  - a pair whose boxes overlap is searched: the search emits the pairs where it stops
  *    (boxes apart, or two leaves) and the overlapping pairs at the cap, below which it
  *    goes on without emitting.
@@ -253,7 +253,8 @@ inline int cs_search_visit(const int2 w, __global const int2* nodes, __global co
  * runs the step again from a finer front. */
 __kernel void cs_front_update(__global const int2* front, const uint n, __global const int2* nodes,
                               __global const float* node_boxes, __global const uint* faces, const uint cap,
-                              const uint floor, __global uint* cut, CS_FRONT_PARAMS CS_EMITTER_PARAMS(uint2, pairs))
+                              const uint deepest, const uint climb, __global uint* cut, CS_FRONT_PARAMS
+                              CS_EMITTER_PARAMS(uint2, pairs))
 {
   CS_FRONT_BEGIN;
   CS_EMITTER_BEGIN(pairs);
@@ -266,6 +267,10 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
   if (s < n) {
     int2 placed = (int2)(0, 0), search = (int2)(0, 0);
     uint2 face_pair = (uint2)(0, 0);
+    /* The floor lies `climb` levels above the deepest a pair may be: the cap where a
+     * deferred front has one (its front then shrinks as pairs climb, and the cap rises
+     * again), else the trees' deepest pairs of leaves. */
+    const uint lowest = min(cap, deepest), floor = lowest > climb ? lowest - climb : 0u;
     const int does = cs_front_start(front[s], nodes, node_boxes, faces, cap, floor, &placed, &face_pair, &search);
     if (does & CS_EMITS_FACES) CS_EMIT(pairs, face_pair);
     if (does & CS_EMITS_FRONT) CS_FRONT_EMIT(placed);

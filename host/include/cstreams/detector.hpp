@@ -98,7 +98,8 @@ struct DetectorOptions {
   double front_budget_mb = 16;
   // A kept front's pairs climb where boxes move apart, each to its highest ancestor
   // whose boxes are apart, but to no level nearer the roots than this many BVTT levels
-  // above the deepest pairs of leaves (the roots at most). Where pairs that climbed far
+  // above the deepest a pair may be: the trees' deepest pairs of leaves, or a deferred
+  // front's level cap (the roots at most). Where pairs that climbed far
   // overlap again, each of their whole subtrees falls to one work-group, and the
   // device waits for the busiest (H200, the 1.5M-triangle sheet: the front update of
   // the step where contact surges took 95-195 ms with no floor, 35-45 ms with this

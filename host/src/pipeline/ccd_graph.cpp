@@ -183,15 +183,9 @@ struct GraphBuilder {
         .arg(buffer_of(s.node_boxes))
         .arg(buffer_of(s.faces))
         .arg(param_of(s.level_cap))
-        .arg(value_of(climb_floor()))
+        .arg(value_of(cl_uint(l.depth > 0 ? 2 * (l.depth - 1) : 0)))
+        .arg(value_of(cl_uint(options.front_climb_levels)))
         .arg(buffer_of(s.searches_cut));
-  }
-
-  // The level above which a kept front's pairs do not climb (DetectorOptions::front_climb_levels).
-  cl_uint climb_floor() const
-  {
-    const std::uint32_t deepest = l.depth > 0 ? 2 * std::uint32_t(l.depth - 1) : 0;
-    return deepest - std::min(deepest, options.front_climb_levels);
   }
 
   // A triangle pair gives 0.2-0.7 vertex-face and 0.6-1.7 edge-edge candidates on the
