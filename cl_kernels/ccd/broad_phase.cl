@@ -111,10 +111,10 @@ inline uint cs_parent_level(const int2 q, const uint level) { return level - (q.
 
 /* A pair of the current front before the group's search: one deeper than `cap` stands
  * for its ancestor at the cap; one whose boxes are apart climbs as far as boxes stay
- * apart, but to no level above `floor`, and takes its place in the next front where it
- * is on its ancestor's chain of first children; two overlapping leaves are settled
- * here. Returns what it does (CS_EMITS_*, or CS_SEARCHES with `search` the pair to
- * search as it waits, cs_waiting).
+ * apart, but to no level above `climb_floor`, and takes its place in the next front
+ * where it is on its ancestor's chain of first children; two overlapping leaves are
+ * settled here. Returns what it does (CS_EMITS_*, or CS_SEARCHES with `search` the
+ * pair to search as it waits, cs_waiting).
  *
  * The floor bounds what one pair's search may cost once its boxes overlap again: a
  * whole subtree falls to the work-group that holds the pair, and pairs that climbed
@@ -123,7 +123,7 @@ inline uint cs_parent_level(const int2 q, const uint level) { return level - (q.
  * took two launches of the front update of 45-99 ms each, most groups idle; with pairs
  * kept from climbing above level 18, 24 or 30 alike, 16-21 ms each (H200). */
 inline int cs_front_start(int2 p, __global const int2* nodes, __global const float* node_boxes,
-                          __global const uint* faces, const uint cap, const uint floor, int2* front,
+                          __global const uint* faces, const uint cap, const uint climb_floor, int2* front,
                           uint2* face_pair, int2* search)
 {
   int live = 1;
@@ -146,7 +146,7 @@ inline int cs_front_start(int2 p, __global const int2* nodes, __global const flo
     cs_dop_load(node_boxes + CS_DOP_FLOATS * (keeps_y ? p.y : p.x), kept);
     apart = cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? p.x : p.y));
     if (apart && CS_KEEP_FRONT) {
-      const int parent_overlaps = q.x < 0 || q.x == q.y || cs_parent_level(q, level) < floor ||
+      const int parent_overlaps = q.x < 0 || q.x == q.y || cs_parent_level(q, level) < climb_floor ||
                                   !cs_dop_apart(kept, node_boxes + CS_DOP_FLOATS * (keeps_y ? q.x : q.y));
       *front = p;
       if (parent_overlaps) return CS_EMITS_FRONT;
@@ -159,7 +159,7 @@ inline int cs_front_start(int2 p, __global const int2* nodes, __global const flo
     /* p's boxes are apart, as are those of the pair below it that climbed here. */
     while (CS_KEEP_FRONT) {
       const int2 q = cs_bvtt_parent(nodes, p);
-      if (q.x < 0 || cs_parent_level(q, level) < floor || cs_pair_overlaps(node_boxes, q)) {
+      if (q.x < 0 || cs_parent_level(q, level) < climb_floor || cs_pair_overlaps(node_boxes, q)) {
         *front = p;
         return CS_EMITS_FRONT;
       }
@@ -270,8 +270,9 @@ __kernel void cs_front_update(__global const int2* front, const uint n, __global
     /* The floor lies `climb` levels above the deepest a pair may be: the cap where a
      * deferred front has one (its front then shrinks as pairs climb, and the cap rises
      * again), else the trees' deepest pairs of leaves. */
-    const uint lowest = min(cap, deepest), floor = lowest > climb ? lowest - climb : 0u;
-    const int does = cs_front_start(front[s], nodes, node_boxes, faces, cap, floor, &placed, &face_pair, &search);
+    const uint lowest = min(cap, deepest), climb_floor = lowest > climb ? lowest - climb : 0u;
+    const int does =
+        cs_front_start(front[s], nodes, node_boxes, faces, cap, climb_floor, &placed, &face_pair, &search);
     if (does & CS_EMITS_FACES) CS_EMIT(pairs, face_pair);
     if (does & CS_EMITS_FRONT) CS_FRONT_EMIT(placed);
     /* One a work-item: the list holds them all. */

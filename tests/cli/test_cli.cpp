@@ -155,7 +155,8 @@ TEST_CASE("run --front-climb reaches the detector and leaves the contacts as the
   execute({"run", a, b, "--repeat", "3", "--front-climb", "0", "--out", (dir / "kept.csv").string(), "--json",
            (dir / "kept.json").string()});
   std::ifstream climbed(dir / "default.csv"), kept(dir / "kept.csv");
-  CHECK(std::string(std::istreambuf_iterator<char>(climbed), {}) == std::string(std::istreambuf_iterator<char>(kept), {}));
+  CHECK(std::string(std::istreambuf_iterator<char>(climbed), {}) ==
+        std::string(std::istreambuf_iterator<char>(kept), {}));
   CHECK(nlohmann::json::parse(std::ifstream(dir / "kept.json"))["front_climb_levels"] == 0);
 }
 

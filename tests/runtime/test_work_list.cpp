@@ -269,7 +269,8 @@ TEST_CASE("a work list run in slices reports the rounds and items of all of them
 // slices of them, as where the device has no memory left, and the slices together
 // count every leaf; the next run starts in slices at once. A single input is refined
 // whole whatever the list may take.
-TEST_CASE("a work list held under its most bytes runs in slices, losing no item", "[runtime][scheduler][worklist][quick]")
+TEST_CASE("a work list held under its most bytes runs in slices, losing no item",
+          "[runtime][scheduler][worklist][quick]")
 {
   const std::size_t n = 3001;
   const auto v = random_values(n, 37);

@@ -144,7 +144,7 @@ runtime::PassSpec& add_refine_pass(runtime::StreamGraph& g, const std::string& n
   }
   // A burst of open queries is refined in slices: the 1.5M-triangle sheet's surge step
   // (9.6M queries in double) held 1.8 GB of state and lists at once, more than half its
-  // peak. A real step's refinement takes 60-140 MB.
+  // peak. A real step's refinement takes 60-230 MB.
   boxes.most_bytes = most_refinement_bytes;
   const std::string refine_options = options + (objects ? " -DCS_EARLIEST_ACROSS=1" : "") +
                                      (device.cpu ? " -DCS_KEEP_FUNCTION=1" : "") +

@@ -58,7 +58,8 @@ template <typename Derived>
 PositionSpan positions_view(const Eigen::MatrixBase<Derived>& V, const char* name, std::size_t rows,
                             std::vector<Vec3>& copy)
 {
-  if constexpr (std::is_same_v<typename Derived::Scalar, double> && bool(int(Derived::Flags) & Eigen::DirectAccessBit)) {
+  constexpr bool direct = bool(int(Derived::Flags) & Eigen::DirectAccessBit);
+  if constexpr (std::is_same_v<typename Derived::Scalar, double> && direct) {
     if (V.cols() == 3 && std::size_t(V.rows()) == rows && V.derived().colStride() == 1 &&
         (V.rows() < 2 || V.derived().rowStride() == 3))
       return PositionSpan(V.derived().data(), rows);
