@@ -205,8 +205,17 @@ void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::siz
   if (timeline) timeline->record("readback", out_event(timeline, event));
 }
 
-Handle<cl_event> Context::read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset,
-                                      Timeline* timeline)
+// Without an event, which the driver would make and the caller free for reads that
+// need none (a step's counts, read behind its kernels).
+void Context::read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset)
+{
+  if (bytes == 0) return;
+  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, nullptr),
+             "clEnqueueReadBuffer", [&] { return "queueing a read of " + std::to_string(bytes) + " bytes"; });
+}
+
+Handle<cl_event> Context::read_started(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset,
+                                       Timeline* timeline)
 {
   if (bytes == 0) return {};
   cl_event event = nullptr;

@@ -202,7 +202,7 @@ const Contact* ContactReadback::read_in_chunks(const runtime::Buffer& contacts, 
   std::vector<runtime::Handle<cl_event>> reads(chunks);
   const auto size = [&](std::size_t k) { return std::min(half, bytes - k * half); };
   const auto queue_read = [&](std::size_t k) {
-    reads[k] = context_.read_queued(contacts, pinned + k % 2 * half, size(k), k * half, events);
+    reads[k] = context_.read_started(contacts, pinned + k % 2 * half, size(k), k * half, events);
   };
   for (std::size_t k = 0; k < std::min<std::size_t>(2, chunks); ++k) queue_read(k);
   for (std::size_t k = 0; k < chunks; ++k) {

@@ -80,10 +80,11 @@ public:
   void read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
             Timeline* timeline = nullptr);
   // A read queued behind the work on queue() that returns at once: `data` holds the
-  // bytes once its event, returned, completes, or a blocking command queued after it
-  // has returned (the queue is in order).
-  Handle<cl_event> read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
-                               Timeline* timeline = nullptr);
+  // bytes once a blocking command queued after it has returned (the queue is in order).
+  void read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0);
+  // The same, with its event: `data` holds the bytes once the event completes.
+  Handle<cl_event> read_started(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
+                                Timeline* timeline = nullptr);
   void copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset = 0,
             std::size_t destination_offset = 0, Timeline* timeline = nullptr);
   void fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,
