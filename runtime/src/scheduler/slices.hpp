@@ -60,6 +60,9 @@ private:
   SliceParts p_;
   std::size_t sliced_pass_ = SIZE_MAX;
   unsigned slices_ = 1;
+  // Whether the slices are for want of memory, rather than for a work list's budget
+  // (WorkListOverBudget): only then does idle scratch go back before them.
+  bool short_of_memory_ = true;
   // The slices that pass `found_pass_` was last found to need, by doubling them, and its
   // input then (0: none yet). What a slice needs follows what it emits more than what
   // it reads (a front's first pairs expand into many, later ones into few), so a run

@@ -86,7 +86,7 @@ void refine(const PassSpec& spec, ListState& l, PassStats& stats, std::size_t n,
     const std::size_t state_needed = std::max<std::size_t>(n, 1) * state_bytes;
     const std::size_t held = state_needed + 2 * grown(n) * w.item_bytes;
     if (w.most_bytes && n > 1 && held > w.most_bytes)
-      throw DeviceMemoryExhausted("the work list of " + label, held,
+      throw WorkListOverBudget("the work list of " + label, held,
                                   "a work list may take at most " + mebibytes(w.most_bytes));
     // A state far larger than this run's goes back too (keep_needed_lists).
     if (l.state.bytes() > 2 * state_needed + kept_list_bytes) host.give_back(l.state, l.state_at);

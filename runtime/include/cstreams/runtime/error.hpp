@@ -79,6 +79,14 @@ private:
   std::size_t requested_;
 };
 
+// A work list whose inputs would take more than its pass lets it (Worklist::most_bytes):
+// the run goes on in slices as where memory runs short, but the memory is there, so
+// nothing idle is given back for it.
+class WorkListOverBudget : public DeviceMemoryExhausted {
+public:
+  using DeviceMemoryExhausted::DeviceMemoryExhausted;
+};
+
 // Runs `allocate`; when the device has no memory left, runs `make_room` and, if that
 // gave any memory back, tries once more.
 template <class Allocate, class MakeRoom> void allocate_making_room(Allocate allocate, MakeRoom make_room)
