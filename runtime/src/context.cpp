@@ -205,13 +205,17 @@ void Context::read(const Buffer& buffer, void* data, std::size_t bytes, std::siz
   if (timeline) timeline->record("readback", out_event(timeline, event));
 }
 
+void Context::enqueue_read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset, cl_event* event)
+{
+  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, event),
+             "clEnqueueReadBuffer", [&] { return "queueing a read of " + std::to_string(bytes) + " bytes"; });
+}
+
 // Without an event, which the driver would make and the caller free for reads that
 // need none (a step's counts, read behind its kernels).
 void Context::read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset)
 {
-  if (bytes == 0) return;
-  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, nullptr),
-             "clEnqueueReadBuffer", [&] { return "queueing a read of " + std::to_string(bytes) + " bytes"; });
+  if (bytes > 0) enqueue_read(buffer, data, bytes, offset, nullptr);
 }
 
 Handle<cl_event> Context::read_started(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset,
@@ -219,11 +223,16 @@ Handle<cl_event> Context::read_started(const Buffer& buffer, void* data, std::si
 {
   if (bytes == 0) return {};
   cl_event event = nullptr;
-  check_with(clEnqueueReadBuffer(queue_.get(), buffer.get(), CL_FALSE, offset, bytes, data, 0, nullptr, &event),
-             "clEnqueueReadBuffer", [&] { return "queueing a read of " + std::to_string(bytes) + " bytes"; });
+  enqueue_read(buffer, data, bytes, offset, &event);
   Handle<cl_event> read(event);
   if (timeline) timeline->record("readback", read);
   return read;
+}
+
+void Context::read_landed(const Handle<cl_event>& read)
+{
+  block_until({read});
+  ++blocking_reads_;
 }
 
 void Context::fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,

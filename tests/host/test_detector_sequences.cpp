@@ -276,4 +276,15 @@ TEST_CASE("contacts past the pinned memory come back in chunks as they would at 
   const auto fresh_pages = [&](const auto& a, const auto& b) { return a.size() <= pinned && b.size() > pinned; };
   CHECK(std::adjacent_find(at_once.begin(), at_once.end(), fresh_pages) != at_once.end());
   CHECK(pinned > 100);
+  // Each chunk's wait counts as a blocking read: a step past the pinned memory takes
+  // at least two more than the same step read at once.
+  const auto past = std::find_if(at_once.begin(), at_once.end(), [&](const auto& c) { return c.size() > pinned; });
+  REQUIRE(past != at_once.end());
+  const Step step = load_step(bodies, std::size_t(past - at_once.begin()));
+  Detector whole(cstreams::test::device(), describe(bodies, 0));
+  Detector chunks(cstreams::test::device(), describe(bodies, 0), chunked);
+  run_step(whole, step);
+  run_step(chunks, step);
+  check_same_contacts(whole.contacts(), chunks.contacts());
+  CHECK(chunks.stats().blocking_reads >= whole.stats().blocking_reads + 2);
 }

@@ -206,7 +206,7 @@ const Contact* ContactReadback::read_in_chunks(const runtime::Buffer& contacts, 
   };
   for (std::size_t k = 0; k < std::min<std::size_t>(2, chunks); ++k) queue_read(k);
   for (std::size_t k = 0; k < chunks; ++k) {
-    context_.block_until({reads[k]});
+    context_.read_landed(reads[k]);
     const std::byte* from = pinned + k % 2 * half;
     std::byte* to = pages_.data() + k * half;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, size(k), std::size_t(1) << 20),

@@ -82,9 +82,11 @@ public:
   // A read queued behind the work on queue() that returns at once: `data` holds the
   // bytes once a blocking command queued after it has returned (the queue is in order).
   void read_queued(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0);
-  // The same, with its event: `data` holds the bytes once the event completes.
+  // The same, with its event: `data` holds the bytes once read_landed() returns on it.
   Handle<cl_event> read_started(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset = 0,
                                 Timeline* timeline = nullptr);
+  // Returns once a read_started() read has landed: a blocking read (blocking_reads()).
+  void read_landed(const Handle<cl_event>& read);
   void copy(const Buffer& source, const Buffer& destination, std::size_t bytes, std::size_t source_offset = 0,
             std::size_t destination_offset = 0, Timeline* timeline = nullptr);
   void fill_u32(const Buffer& buffer, std::uint32_t value, std::size_t first, std::size_t count,
@@ -121,6 +123,9 @@ public:
   const std::shared_ptr<MemoryAccount>& memory_account() const noexcept { return memory_; }
 
 private:
+  // Queues a read without blocking; its event goes to `event` where that is not null.
+  void enqueue_read(const Buffer& buffer, void* data, std::size_t bytes, std::size_t offset, cl_event* event);
+
   DeviceInfo device_;
   Handle<cl_context> context_;
   Handle<cl_command_queue> queue_;
