@@ -86,9 +86,16 @@ void check_float_positions(PositionSpan x)
                 [](bool a, bool b) { return a && b; });
   // Only bad input looks for the vertex to name.
   if (finite) return;
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (!finite_floats(d, 3 * i, 3 * i + 3))
-      throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
+  const std::size_t i = first_not_float(x);
+  if (i < x.size()) throw InputError("vertex " + std::to_string(i) + " has a coordinate that is not a finite float");
+}
+
+std::size_t first_not_float(PositionSpan x)
+{
+  const double* d = x.coordinates();
+  std::size_t i = 0;
+  while (i < x.size() && finite_floats(d, 3 * i, 3 * i + 3)) ++i;
+  return i;
 }
 
 namespace {

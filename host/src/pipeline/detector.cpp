@@ -105,7 +105,8 @@ struct Detector::State {
         std::async(std::launch::async, [this, &cut] { return front.first_front(cut); });
     // Each kind of detector reads back its own results: a reader builds its sort and
     // pins its host memory as it is made.
-    if (o.detects == Detects::contacts) readback.emplace(device, layout, scene, o.solver.precision, o.pinned_contact_bytes);
+    if (o.detects == Detects::contacts)
+      readback.emplace(device, layout, scene, o.solver.precision, o.pinned_contact_bytes);
     else close_readback.emplace(device, layout, ids);
     CcdGraph g = build_ccd_graph(layout, options, cut.size(), graph_device(device));
     streams = g.streams;

@@ -1,4 +1,5 @@
 #include <cstreams/errors.hpp>
+#include <cstreams/geometry/float_bounds.hpp>
 #include <cstreams/simulation/arrays.hpp>
 
 namespace cstreams::details {
@@ -30,8 +31,8 @@ namespace cstreams {
 
 void name_bad_positions(PositionSpan x, const char* name)
 {
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (!details::fits_float(x[i])) details::throw_not_finite(name, std::ptrdiff_t(i));
+  const std::size_t i = first_not_float(x);
+  if (i < x.size()) details::throw_not_finite(name, std::ptrdiff_t(i));
 }
 
 }  // namespace cstreams

@@ -87,7 +87,7 @@ void refine(const PassSpec& spec, ListState& l, PassStats& stats, std::size_t n,
     const std::size_t held = state_needed + 2 * grown(n) * w.item_bytes;
     if (w.most_bytes && n > 1 && held > w.most_bytes)
       throw WorkListOverBudget("the work list of " + label, held,
-                                  "a work list may take at most " + mebibytes(w.most_bytes));
+                               "a work list may take at most " + mebibytes(w.most_bytes));
     // A state far larger than this run's goes back too (keep_needed_lists).
     if (l.state.bytes() > 2 * state_needed + kept_list_bytes) host.give_back(l.state, l.state_at);
     host.take(l.state, l.state_at, state_needed, "work list state");

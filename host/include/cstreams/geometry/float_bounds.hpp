@@ -39,6 +39,9 @@ std::vector<float> to_float_positions(const std::vector<Vec3>& x);
 // The halves of that: the check, and the rounding to nearest, into a new array or into
 // `out` (3 floats a vertex).
 void check_float_positions(PositionSpan x);
+// The first position with a coordinate that is not a finite float (x.size(): none), for
+// a message that names it once a check has failed.
+std::size_t first_not_float(PositionSpan x);
 FloatPositions rounded_positions(const std::vector<Vec3>& x);
 // Rounding into `out` checks as it goes, in the same pass: whether every coordinate is
 // a finite float (else `out` is of no use, and check_float_positions() names the first

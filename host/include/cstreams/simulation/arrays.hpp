@@ -24,12 +24,6 @@ namespace details {
                                   std::size_t want_cols);
 [[noreturn]] void throw_not_finite(const char* name, std::ptrdiff_t row);
 [[noreturn]] void throw_bad_index(const char* name, std::ptrdiff_t row, long long index, std::size_t vertices);
-// Finite and within float's range, which the device computes in.
-inline bool fits_float(const Vec3& x)
-{
-  constexpr double largest = std::numeric_limits<float>::max();
-  return std::abs(x[0]) <= largest && std::abs(x[1]) <= largest && std::abs(x[2]) <= largest;
-}
 }  // namespace details
 
 // Copies positions V (#V x 3; `rows` of them where rows > 0) in double into `out`,
@@ -42,9 +36,11 @@ void positions_into(const Eigen::MatrixBase<Derived>& V, const char* name, std::
   static_assert(std::is_floating_point_v<typename Derived::Scalar>, "positions are float or double");
   if (V.cols() != 3 || (rows > 0 && std::size_t(V.rows()) != rows)) details::throw_bad_shape(name, V.rows(), V.cols(), rows, 3);
   out.resize(std::size_t(V.rows()));
+  constexpr double largest = std::numeric_limits<float>::max();
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
     const Vec3 x(double(V(i, 0)), double(V(i, 1)), double(V(i, 2)));
-    if (!details::fits_float(x)) details::throw_not_finite(name, i);
+    if (!(std::abs(x[0]) <= largest && std::abs(x[1]) <= largest && std::abs(x[2]) <= largest))
+      details::throw_not_finite(name, i);
     out[std::size_t(i)] = x;
   }
 }
@@ -68,8 +64,8 @@ PositionSpan positions_view(const Eigen::MatrixBase<Derived>& V, const char* nam
   return copy;
 }
 
-// Throws the InputError positions_into() would for the first coordinate of x that is not
-// a finite float; returns where every one is.
+// Throws the InputError positions_into() would for the first position of x with a
+// coordinate that is not a finite float (first_not_float); returns where every one is.
 void name_bad_positions(PositionSpan x, const char* name);
 
 template <typename Derived>
