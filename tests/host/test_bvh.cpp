@@ -4,6 +4,8 @@
 #include <cstreams/reference/reference_ccd.hpp>
 #include <cstreams/scenes/shapes.hpp>
 
+#include "../support/scratch.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -11,7 +13,6 @@
 #include <cmath>
 #include <limits>
 #include <random>
-#include <unistd.h>
 
 using namespace cstreams;
 
@@ -87,8 +88,7 @@ TEST_CASE("BVH traversal and brute force find the same candidates", "[host][bvh]
 {
   const Mesh a = cloth_and_ball(0), b = cloth_and_ball(0.45);
   for (bool split : {false, true}) {
-    char templ[] = "/tmp/cstreams-bvh-XXXXXX";
-    const std::string dir = mkdtemp(templ);
+    const std::string dir = cstreams::test::fresh_scratch("bvh").string();
     // Two frames written to disk, as a user's scene would be.
     write_ply(dir + "/cstreams_bvh_0.ply", a);
     write_ply(dir + "/cstreams_bvh_1.ply", b);
@@ -122,8 +122,7 @@ template <class Pair> bool includes(const std::vector<Pair>& big, const std::vec
 TEST_CASE("float-box candidates contain the exact-box candidates", "[host][bvh][quick]")
 {
   const Mesh a = cloth_and_ball(0), b = cloth_and_ball(0.45);
-  char templ[] = "/tmp/cstreams-bvhf-XXXXXX";
-  const std::string dir = mkdtemp(templ);
+  const std::string dir = cstreams::test::fresh_scratch("bvh-float").string();
   write_ply(dir + "/0.ply", a);
   write_ply(dir + "/1.ply", b);
   const Scene scene = scene_from_frames({dir + "/0.ply", dir + "/1.ply"}, true);

@@ -1,6 +1,8 @@
 #include <cstreams/io/mesh_io.hpp>
 #include <cstreams/scene/scene.hpp>
 
+#include "../support/scratch.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <cstring>
@@ -59,11 +61,7 @@ template <class Coord> std::string ply_bytes(const Mesh& m, const char* format, 
   return out;
 }
 
-std::string temp_dir()
-{
-  char templ[] = "/tmp/cstreams-test-XXXXXX";
-  return mkdtemp(templ);
-}
+std::string temp_dir(const std::string& name) { return cstreams::test::fresh_scratch("mesh-io-" + name).string(); }
 
 void write_text(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
 
@@ -152,7 +150,7 @@ TEST_CASE("OBJ reads triangles in every index form and names lines in errors", "
 
 TEST_CASE("write_ply round-trips exactly and leaves nothing behind on failure", "[host][io][quick]")
 {
-  const std::string dir = temp_dir();
+  const std::string dir = temp_dir("write-ply");
   Mesh m = tetrahedron();
   m.positions[1].x() = 0.1;  // not a float: a double PLY must keep it exactly
   for (auto encoding : {PlyEncoding::ascii, PlyEncoding::binary_little_endian}) {
@@ -167,7 +165,7 @@ TEST_CASE("write_ply round-trips exactly and leaves nothing behind on failure", 
 
 TEST_CASE("scenes check every frame against the first", "[host][scene][quick]")
 {
-  const std::string dir = temp_dir();
+  const std::string dir = temp_dir("scene-frames");
   Mesh m = tetrahedron();
   write_ply(dir + "/0.ply", m);
   m.positions[0].z() = -0.5;
@@ -191,7 +189,7 @@ TEST_CASE("scenes check every frame against the first", "[host][scene][quick]")
 
 TEST_CASE("manifests describe objects, kinds, frames and masks", "[host][scene][quick]")
 {
-  const std::string dir = temp_dir();
+  const std::string dir = temp_dir("manifest");
   Mesh a = tetrahedron(), b = tetrahedron();
   for (auto& p : b.positions) p.x() += 3;
   Mesh two;  // two tetrahedra in one file: split into components
@@ -238,7 +236,7 @@ TEST_CASE("manifests describe objects, kinds, frames and masks", "[host][scene][
 // manifest of 911 bytes ran the parser out of memory).
 TEST_CASE("a manifest's frame pattern names each frame as it is read, a million of them at no cost", "[host][scene][quick]")
 {
-  const std::string dir = temp_dir();
+  const std::string dir = temp_dir("frame-pattern");
   write_ply(dir + "/cloth_0.ply", tetrahedron());
   write_ply(dir + "/cloth_" + std::string(199, '0') + "7.ply", tetrahedron());
   write_text(dir + "/wide.json", R"({"objects": [
