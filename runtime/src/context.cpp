@@ -371,7 +371,7 @@ void Kernel::set_raw(unsigned index, std::size_t size, const void* value) const
 
 void Timeline::record(std::string label, Handle<cl_event> event)
 {
-  pending_.push_back({std::move(label), std::move(event)});
+  pending_.push_back({std::move(label), std::move(event), std::chrono::steady_clock::now()});
 }
 
 std::vector<Timeline::Entry> Timeline::resolve() const
@@ -392,7 +392,7 @@ std::vector<Timeline::Entry> Timeline::resolve() const
                "clGetEventProfilingInfo", describe);
     check_with(clGetEventProfilingInfo(p.event.get(), CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr),
                "clGetEventProfilingInfo", describe);
-    entries.push_back({p.label, end > start ? end - start : 0, queued, start, end});
+    entries.push_back({p.label, end > start ? end - start : 0, queued, start, end, p.host_queued});
   }
   return entries;
 }

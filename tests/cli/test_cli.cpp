@@ -215,11 +215,14 @@ TEST_CASE("run --json gives each step's device span around its passes' time, and
   CHECK(commands[0]["start_us"].get<double>() == 0);
   unsigned launches = 0, reads = 0;
   std::map<std::string, double> pass_us;
-  double ended = 0;
+  double ended = 0, host_before = 0;
   for (const auto& c : commands) {
     const std::string what = c["what"];
-    const double queued = c["queued_us"], start = c["start_us"], end = c["end_us"];
+    const double queued = c["queued_us"], start = c["start_us"], end = c["end_us"], host = c["host_us"];
     CHECK(queued <= start);
+    // The host queues in order, from the step's start.
+    CHECK(host >= host_before);
+    host_before = host;
     CHECK(start <= end);
     CHECK(start >= ended);
     ended = end;

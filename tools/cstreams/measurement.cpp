@@ -34,15 +34,24 @@ nlohmann::json step_json(std::size_t frame, const DetectorStats& s, double host_
   }
   // Every command of the step on the device's clock, in microseconds from the first
   // one's start: where the device waited for the host (before a command was queued) and
-  // for a launch (between its queueing and its start).
+  // for a launch (between its queueing and its start). And on the host's clock, from
+  // the step's start, when it was queued: what the host did before the first command
+  // and after the last is the rest of the step's wall time.
   nlohmann::json commands = nlohmann::json::array();
   // Apart in integers first: a device clock counts from its epoch, past what a double
   // holds to the nanosecond.
   const std::int64_t first = std::int64_t(s.run.span().start);
   const auto us = [&](std::uint64_t t) { return double(std::int64_t(t) - first) * 1e-3; };
+  const auto host_us = [&](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::micro>(t - s.started).count();
+  };
   if (timed)
     for (const auto& c : s.run.commands)
-      commands.push_back({{"what", c.label}, {"queued_us", us(c.queued)}, {"start_us", us(c.start)}, {"end_us", us(c.end)}});
+      commands.push_back({{"what", c.label},
+                          {"queued_us", us(c.queued)},
+                          {"start_us", us(c.start)},
+                          {"end_us", us(c.end)},
+                          {"host_us", host_us(c.host_queued)}});
   for (const auto& st : s.run.streams)
     streams[st.name] = {{"count", st.count},
                         {"items", st.items},

@@ -23,6 +23,7 @@
 #include <cstreams/runtime/scheduler.hpp>
 #include <cstreams/scene/scene.hpp>
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -143,6 +144,7 @@ struct DetectorStats {
   // proven and that ran again in double (SolverOptions::escalate).
   std::size_t escalated = 0;
   double host_ms = 0;               // wall time of the last detect(), uploads and readbacks included
+  std::chrono::steady_clock::time_point started;  // when the last detect() began
   unsigned launches = 0;            // kernel launches of the last detect(), every one
   unsigned blocking_reads = 0;      // and its blocking reads (counters, flags, contacts)
   std::uint64_t device_ns() const;  // sum of the passes' device time

@@ -359,6 +359,7 @@ void Detector::run_step(Report report)
   stats.peak_bytes = s.context.memory_high_water();
   stats.launches = unsigned(s.context.kernel_launches() - launches);
   stats.blocking_reads = unsigned(s.context.blocking_reads() - reads);
+  stats.started = started;
   stats.host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
 }
 

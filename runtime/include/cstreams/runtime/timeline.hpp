@@ -1,6 +1,7 @@
 #pragma once
 #include <cstreams/runtime/handle.hpp>
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -31,6 +32,10 @@ public:
     // the previous command's end to its queueing) apart from the launch latency (from
     // its queueing to its start).
     std::uint64_t queued = 0, start = 0, end = 0;
+    // On the host's clock, when the command was queued: set beside `queued`, it tells
+    // where the host was while the device ran or waited, before a step's first command
+    // and after its last included.
+    std::chrono::steady_clock::time_point host_queued;
   };
 
   void record(std::string label, Handle<cl_event> event);
@@ -44,6 +49,7 @@ private:
   struct Pending {
     std::string label;
     Handle<cl_event> event;
+    std::chrono::steady_clock::time_point host_queued;
   };
   std::vector<Pending> pending_;
 };
