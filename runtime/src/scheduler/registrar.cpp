@@ -83,13 +83,17 @@ void Registrar::fall_back_to_global_counter(PassState& p)
     scratch_.drop_segments(e);
     e.segment_bytes = 0;
   }
-  if (!p.atomic_kernel.get()) {
-    p.atomic_kernel = build_pass_kernel(context_, *p.spec, Registration::global_atomic, p.spec->kernel.kernel);
-    if (!p.spec->variant_kernel.empty())
-      p.atomic_variant = build_pass_kernel(context_, *p.spec, Registration::global_atomic, p.spec->variant_kernel);
-  }
+  build_fallback(context_, p);
   p.mode = Registration::global_atomic;
   p.atomic_this_run = true;
+}
+
+void build_fallback(Context& context, PassState& p)
+{
+  if (p.atomic_kernel.get()) return;
+  p.atomic_kernel = build_pass_kernel(context, *p.spec, Registration::global_atomic, p.spec->kernel.kernel);
+  if (!p.spec->variant_kernel.empty())
+    p.atomic_variant = build_pass_kernel(context, *p.spec, Registration::global_atomic, p.spec->variant_kernel);
 }
 
 void Registrar::prepare_segments(EmitterState& e, std::size_t global)

@@ -25,13 +25,16 @@ class Context;
 class Timeline;
 
 // The registration a pass's kernels are built for: the global counter where its items
-// may come in any order, else the scheduler's.
+// may come in any order, or where it emits none (its kernels are then the same in
+// every mode, and one build serves as its fallback too), else the scheduler's.
 inline Registration registration_of(const PassSpec& spec, Registration preferred)
 {
-  return spec.any_order ? Registration::global_atomic : preferred;
+  return spec.any_order || spec.emits.empty() ? Registration::global_atomic : preferred;
 }
 // The pass's kernel `name` built for registration `mode`.
 Kernel build_pass_kernel(Context& context, const PassSpec& spec, Registration mode, const std::string& name);
+// The pass's kernels for the global counter, its fallback, unless it has them.
+void build_fallback(Context& context, PassState& p);
 
 class Registrar {
 public:

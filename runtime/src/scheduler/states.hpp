@@ -66,7 +66,8 @@ inline const Buffer& plan_of(const EmitterState& e, const Buffer& no_plan) { ret
 struct PassState {
   const PassSpec* spec = nullptr;
   Kernel kernel;          // built for the scheduler's registration
-  Kernel atomic_kernel;   // built on first need: the fallback when segments would not fit
+  Kernel atomic_kernel;   // the fallback when segments would not fit: built on first need,
+                          // or kernel itself where that is built for the global counter
   Kernel variant, atomic_variant;  // the same two of PassSpec::instead_while's kernel
   Registration mode = Registration::global_atomic;  // of the current execution
   bool atomic_this_run = false;
