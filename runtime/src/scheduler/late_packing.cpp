@@ -1,6 +1,7 @@
 #include "late_packing.hpp"
 
 #include "../step_arena.hpp"
+#include "growth.hpp"
 
 #include <cstreams/runtime/error.hpp>
 
@@ -72,8 +73,10 @@ void LatePacker::give_back_spent_inputs(PassState& p, std::size_t bytes)
 // run() checks for before it reads the input again. Taking the input's buffer gives
 // the input the output's, in steady state the empty one the input was left with last
 // run, so that a step allocates nothing here. Where the output needs a new buffer, the
-// input is kept until it has one: the pass may then still run again, in slices, if
-// there is no room for it.
+// input, spent, goes first where the new one fits the memory limit without it: the two
+// fronts and the segments between them had set the 1.5M-triangle sheet's peak in each
+// step where its front grew. Else the input is kept until the output has a buffer: the
+// pass may then still run again, in slices, if there is no room for it.
 void LatePacker::hand_over(PassState& p, const EmitterState& e)
 {
   auto &in = streams_.state(e.handed_from), &out = streams_.state(e.stream);
@@ -84,7 +87,11 @@ void LatePacker::hand_over(PassState& p, const EmitterState& e)
     std::swap(out.capacity, in.capacity);
     out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
   }
-  if (out.capacity < n) scratch_.with_memory([&] { streams_.grow(e.stream, n); });
+  if (out.capacity < n) {
+    if (scratch_.fits_once_gone(in.buffer.bytes(), grown(n) * streams_.spec(e.stream).element_bytes))
+      leave_spent(p, e);
+    scratch_.with_memory([&] { streams_.grow(e.stream, n); });
+  }
   leave_spent(p, e);
 }
 

@@ -6,6 +6,12 @@
 
 namespace cstreams::runtime {
 
+bool Scratch::fits_once_gone(std::size_t gone, std::size_t bytes) const
+{
+  const std::size_t in_use = context_.memory_in_use() - std::min(gone, context_.memory_in_use());
+  return !pressed_ && in_use + bytes <= context_.memory_limit();
+}
+
 void Scratch::take_segments(EmitterState& e, std::size_t bytes)
 {
   if (use_arena_) {

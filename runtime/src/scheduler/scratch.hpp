@@ -37,6 +37,9 @@ public:
   bool use_arena() const { return use_arena_; }
   // Memory ran short once (release_idle).
   bool pressed() const { return pressed_; }
+  // Whether `bytes` fit the memory limit once `gone` bytes go back, memory never having
+  // run short.
+  bool fits_once_gone(std::size_t gone, std::size_t bytes) const;
   // This run packs transient outputs late (Registrar::packs_late): without a memory
   // budget, or into an arena whose start found room for it twice over. A stream packed
   // late is allocated while its segments hold its items, when the pass can no longer
