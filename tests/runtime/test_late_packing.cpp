@@ -67,8 +67,10 @@ TEST_CASE("a pass hands its input's buffer over to what it emits, and the device
 
 // Where the output needs a buffer larger than its input's, the input, spent, goes back
 // first, so that a step never holds both beside the pass's segments (the 1.5M-triangle
-// sheet's growing steps had peaked with both: 2,551 MiB, 2,386 without).
-TEST_CASE("a hand-over to a larger buffer gives the spent input back first", "[runtime][scheduler][quick]")
+// sheet's growing steps had peaked with both: 2,551 MiB, 2,386 without). Here every
+// generation outgrows its spill pool and runs again, and the bound allows for the
+// first run's segments beside the rerun's; it holds the step to less than both buffers.
+TEST_CASE("a hand-over to a larger buffer holds less than its segments, its output and its input", "[runtime][scheduler][quick]")
 {
   StreamId now, next;
   const StreamGraph g = begetting(now, next);
@@ -91,8 +93,10 @@ TEST_CASE("a hand-over to a larger buffer gives the spent input back first", "[r
     INFO("generation " << generation << ": input " << input << " bytes, output " << output << ", segments and their "
                        << "counts " << segments << ", the step's peak " << above << " above what was held before");
     // The segments' counts and offsets come and go around them: half the input is
-    // room enough for those, not for the input.
-    CHECK(above <= segments + output + input / 2 - input);
+    // room enough for those, not for the input. A generation that outgrew its spill
+    // pool may have held its first segments beside the rerun's.
+    const std::size_t held = s.stats().passes.at(0).reruns > 0 ? 2 * segments : segments;
+    CHECK(above <= held + output + input / 2 - input);
     s.swap(now, next);
   }
 }
