@@ -65,42 +65,6 @@ TEST_CASE("a pass hands its input's buffer over to what it emits, and the device
   CHECK_THROWS_WITH(sizes.schedule(), Catch::Contains("with items of the same size"));
 }
 
-// Where the output needs a buffer larger than its input's, the input, spent, goes back
-// first, so that a step never holds both beside the pass's segments (the 1.5M-triangle
-// sheet's growing steps had peaked with both: 2,551 MiB, 2,386 without). Here every
-// generation outgrows its spill pool and runs again, and the bound allows for the
-// first run's segments beside the rerun's; it holds the step to less than both buffers.
-TEST_CASE("a hand-over to a larger buffer holds less than its segments, its output and its input", "[runtime][scheduler][quick]")
-{
-  StreamId now, next;
-  const StreamGraph g = begetting(now, next);
-  Context own(filter_from_environment());
-  own.programs().add_sources(test_kernel_sources());
-  Scheduler s(own, g, {Registration::segmented_lock, true});
-  // Generations that grow 2.6 times each: the output never fits the input's buffer.
-  auto values = random_values(20000, 29);
-  s.upload(now, values);
-  for (int generation = 0; generation < 3; ++generation) {
-    const std::size_t input = s.capacity(now) * 4;
-    own.reset_memory_high_water();
-    const std::size_t before = own.memory_in_use();
-    s.run();
-    values = begotten(values);
-    CHECK(sorted(s.download<std::uint32_t>(next)) == sorted(values));
-    const std::size_t output = s.capacity(next) * 4;
-    const std::size_t segments = s.stats().passes.at(0).scratch_bytes + s.stats().scratch_bytes;
-    const std::size_t above = own.memory_high_water() - before;
-    INFO("generation " << generation << ": input " << input << " bytes, output " << output << ", segments and their "
-                       << "counts " << segments << ", the step's peak " << above << " above what was held before");
-    // The segments' counts and offsets come and go around them: half the input is
-    // room enough for those, not for the input. A generation that outgrew its spill
-    // pool may have held its first segments beside the rerun's.
-    const std::size_t held = s.stats().passes.at(0).reruns > 0 ? 2 * segments : segments;
-    CHECK(above <= held + output + input / 2 - input);
-    s.swap(now, next);
-  }
-}
-
 // Short of memory, the pass registers through the global counter, straight into a buffer
 // of the output's own; its input is spent all the same and goes back once the pass is
 // done, as a hand-over leaves it, so that the passes after it have that room.
