@@ -1,7 +1,6 @@
 #include "late_packing.hpp"
 
 #include "../step_arena.hpp"
-#include "growth.hpp"
 
 #include <cstreams/runtime/error.hpp>
 
@@ -88,8 +87,8 @@ void LatePacker::hand_over(PassState& p, const EmitterState& e)
     out.peak_bytes = std::max(out.peak_bytes, out.buffer.bytes());
   }
   if (out.capacity < n) {
-    if (scratch_.fits_once_gone(in.buffer.bytes(), grown(n) * streams_.spec(e.stream).element_bytes))
-      leave_spent(p, e);
+    const std::size_t bytes = streams_.grown_items(e.stream, n) * streams_.spec(e.stream).element_bytes;
+    if (scratch_.fits_once_gone(in.buffer.bytes(), bytes)) leave_spent(p, e);
     scratch_.with_memory([&] { streams_.grow(e.stream, n); });
   }
   leave_spent(p, e);

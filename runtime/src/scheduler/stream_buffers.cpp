@@ -41,7 +41,12 @@ void StreamBuffers::grow(StreamId s, std::size_t needed, bool slack)
   auto& st = streams_.at(s.index);
   if (st.base > 0) return grow_gathered(s, needed, slack);
   drop(st);
-  allocate(s, slack ? std::min(grown(needed), std::max(st.limit, needed)) : needed);
+  allocate(s, slack ? grown_items(s, needed) : needed);
+}
+
+std::size_t StreamBuffers::grown_items(StreamId s, std::size_t needed) const
+{
+  return std::min(grown(needed), std::max(streams_.at(s.index).limit, needed));
 }
 
 // Where the device cannot hold the items twice, they wait on the host.

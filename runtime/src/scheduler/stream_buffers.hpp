@@ -44,6 +44,8 @@ public:
   // gathered stream's counting on the slices left yielding as many as this one).
   // Its producer runs again, so the old buffer goes first: the device need not hold both.
   void grow(StreamId s, std::size_t needed, bool slack = true);
+  // The items grow() with slack takes for `needed`.
+  std::size_t grown_items(StreamId s, std::size_t needed) const;
 
 private:
   void grow_gathered(StreamId s, std::size_t needed, bool slack);
